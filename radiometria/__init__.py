@@ -1,0 +1,28 @@
+"""radiometria: radiometry, photometry, colorimetry and Monte Carlo integration in JAX.
+
+Implements the thesis *Metodi di Monte Carlo Applicati Alla Computer Grafica*: chapter 1
+(radiometry, `radiometria.radiometry`), chapter 2 (photometry, colorimetry, RGB-to-spectrum
+upsampling, camera: `photometry`, `colorimetry`, `upsampling`, `camera`), chapter 3 (surfaces,
+`scattering`), chapters 5-7 (`montecarlo`) and chapters 8-9 (`render`).
+
+```python
+import radiometria as rm
+rm.radiometry.planck(550.0, 5000.0)  # W sr^-1 m^-2 nm^-1
+```
+"""
+
+import importlib.metadata
+
+from . import (
+    camera as camera,
+    colorimetry as colorimetry,
+    constants as constants,
+    montecarlo as montecarlo,
+    photometry as photometry,
+    radiometry as radiometry,
+    render as render,
+    scattering as scattering,
+    upsampling as upsampling,
+)
+
+__version__ = importlib.metadata.version("radiometria")

@@ -1,0 +1,1 @@
+"""Camera (thesis section 2.3): pinhole projection, reconstruction filters and film."""

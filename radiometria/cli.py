@@ -1,0 +1,121 @@
+"""The `radiometria` command (also `python -m radiometria`).
+
+Subcommands:
+
+- `figures --out DIR [--only NAME ...] [--smoke]`: write every thesis figure (PNG and PDF).
+- `demo [--out DIR] [--spp N]`: render the Cornell box and write the figures into `./out`.
+- `lut build --space NAME --res N --out FILE`, `lut check FILE`: RGB-to-spectrum tables.
+- `render SCENE --spp N --out FILE [--width W --height H --seed S --max-depth D]`.
+
+Each long task shows a progress bar on stderr (tqdm).
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+__all__ = ["main"]
+
+
+def _figures(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from .figures import FIGURES, make_figures
+
+    names = args.only or sorted(FIGURES)
+    bar = tqdm(total=len(names), desc="figures", unit="fig", file=sys.stderr)
+
+    def progress(name: str) -> None:
+        bar.set_postfix_str(name)
+        bar.update(1)
+
+    paths = make_figures(args.out, names, smoke=args.smoke, progress=progress)
+    bar.close()
+    for p in paths:
+        print(p)
+    return 0
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from .render._cli import demo_render
+
+    out = Path(args.out)
+    paths = demo_render(out, spp=args.spp, smoke=args.smoke)
+    for p in paths:
+        print(p)
+    args.only = None
+    return _figures(args)
+
+
+def _lut_build(args: argparse.Namespace) -> int:
+    from .upsampling._cli import lut_build
+
+    return lut_build(args)
+
+
+def _lut_check(args: argparse.Namespace) -> int:
+    from .upsampling._cli import lut_check
+
+    return lut_check(args)
+
+
+def _render(args: argparse.Namespace) -> int:
+    from .render._cli import render_command
+
+    return render_command(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the `radiometria` command."""
+    parser = argparse.ArgumentParser(
+        prog="radiometria",
+        description="Radiometry, colorimetry and Monte Carlo in JAX, and a spectral path tracer.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("figures", help="write every thesis figure (PNG and PDF)")
+    p.add_argument("--out", type=Path, required=True, help="output directory")
+    p.add_argument("--only", nargs="+", metavar="NAME", help="only these figures")
+    p.add_argument("--smoke", action="store_true", help="small sample counts (CI)")
+    p.set_defaults(func=_figures)
+
+    p = sub.add_parser("demo", help="render the Cornell box and write the figures into ./out")
+    p.add_argument("--out", type=Path, default=Path("out"), help="output directory [./out]")
+    p.add_argument("--spp", type=int, default=64, help="samples per pixel of the render [64]")
+    p.add_argument("--smoke", action="store_true", help="small sample counts (CI)")
+    p.set_defaults(func=_demo)
+
+    lut = sub.add_parser("lut", help="RGB-to-spectrum coefficient tables")
+    lsub = lut.add_subparsers(dest="lut_command", required=True, metavar="ACTION")
+    p = lsub.add_parser("build", help="fit a coefficient table")
+    p.add_argument("--space", default="sRGB", help="RGB colour space name [sRGB]")
+    p.add_argument("--res", type=int, default=64, help="table resolution [64]")
+    p.add_argument("--out", type=Path, required=True, help="output file (.npz or .coeff)")
+    p.set_defaults(func=_lut_build)
+    p = lsub.add_parser("check", help="round-trip error statistics of a table")
+    p.add_argument("file", type=Path, help="table file (.npz or .coeff)")
+    p.add_argument("--grid", type=int, default=33, help="grid points per axis [33]")
+    p.add_argument("--random", type=int, default=100_000, help="random colours [100000]")
+    p.set_defaults(func=_lut_check)
+
+    p = sub.add_parser("render", help="render a scene")
+    p.add_argument("scene", help="'cornell-box', 'cornell-box-measured' or a scene file")
+    p.add_argument("--spp", type=int, default=64, help="samples per pixel [64]")
+    p.add_argument("--out", type=Path, required=True, help="output image (.exr or .png)")
+    p.add_argument("--width", type=int, default=None, help="image width [scene's]")
+    p.add_argument("--height", type=int, default=None, help="image height [scene's]")
+    p.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    p.add_argument("--max-depth", type=int, default=None, help="maximum path depth [scene's]")
+    p.set_defaults(func=_render)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the `radiometria` command; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ValueError, TypeError, OSError) as err:
+        print(f"radiometria: error: {err}", file=sys.stderr)
+        return 2

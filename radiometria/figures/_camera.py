@@ -1,0 +1,3 @@
+"""Figures for `radiometria.camera`."""
+
+from ._registry import figure, save  # noqa: F401

@@ -1,0 +1,3 @@
+"""Figures for `radiometria.montecarlo`."""
+
+from ._registry import figure, save  # noqa: F401

@@ -1,0 +1,3 @@
+"""Figures for `radiometria.radiometry`."""
+
+from ._registry import figure, save  # noqa: F401

@@ -1,0 +1,1 @@
+"""Surfaces (thesis ch. 3): reflection, refraction, Fresnel equations and BxDFs."""
