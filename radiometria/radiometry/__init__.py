@@ -1,1 +1,46 @@
-"""Radiometry (thesis ch. 1, sections 1.4-1.5): Planck's law, spectra and radiometric quantities."""
+"""Radiometry (thesis ch. 1, sections 1.4-1.5): Planck's law, spectra and radiometric quantities.
+
+- Blackbody radiation (section 1.5): `planck` (eq. 1.24, per nm), `planck_frequency` (per Hz),
+  `planck_exitance` (eq. 1.23), `stefan_boltzmann_exitance` (eq. 1.22), and Wien's
+  displacement law `planck_peak_wavelength` / `planck_peak_frequency`.
+- Sampled spectra on nanometre grids: `integrate_spectrum` (trapezoid rule, irregular grids) and
+  `resample_spectrum` (linear interpolation with an explicit extrapolation policy).
+- Closed-form relations between quantities (sections 1.1-1.4): irradiance from radiance over a
+  cone or the hemisphere (eq. 1.13), Lambertian exitance, point sources and the inverse-square
+  law, Lambert's cosine law, etendue and basic radiance (eq. 1.14-1.21), photon energy,
+  wavelength/frequency and per-nm/per-Hz conversions.
+
+Wavelengths are in nm and spectral densities per nm at every boundary; everything else is SI.
+"""
+
+from ._planck import (
+    planck as planck,
+    planck_exitance as planck_exitance,
+    planck_frequency as planck_frequency,
+    planck_peak_frequency as planck_peak_frequency,
+    planck_peak_wavelength as planck_peak_wavelength,
+    stefan_boltzmann_exitance as stefan_boltzmann_exitance,
+)
+from ._quantities import (
+    basic_radiance as basic_radiance,
+    beer_lambert_transmittance as beer_lambert_transmittance,
+    etendue as etendue,
+    exitance_from_radiance as exitance_from_radiance,
+    flux_from_intensity as flux_from_intensity,
+    frequency_to_wavelength as frequency_to_wavelength,
+    intensity_from_flux as intensity_from_flux,
+    irradiance_from_intensity as irradiance_from_intensity,
+    irradiance_from_radiance as irradiance_from_radiance,
+    lambert_intensity as lambert_intensity,
+    photon_energy as photon_energy,
+    radiance_from_basic_radiance as radiance_from_basic_radiance,
+    radiance_from_exitance as radiance_from_exitance,
+    radiance_from_irradiance as radiance_from_irradiance,
+    spectral_density_per_hz_to_per_nm as spectral_density_per_hz_to_per_nm,
+    spectral_density_per_nm_to_per_hz as spectral_density_per_nm_to_per_hz,
+    wavelength_to_frequency as wavelength_to_frequency,
+)
+from ._spectra import (
+    integrate_spectrum as integrate_spectrum,
+    resample_spectrum as resample_spectrum,
+)

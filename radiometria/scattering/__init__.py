@@ -1,1 +1,61 @@
-"""Surfaces (thesis ch. 3): reflection, refraction, Fresnel equations and BxDFs."""
+"""Surfaces (thesis ch. 3): reflection, refraction, Fresnel equations and BxDFs.
+
+- `_directions`: reflect / refract (thesis eq. 3.7-3.12), shading frames, spherical coordinates;
+- `_fresnel`: Fresnel equations for dielectrics and conductors (eq. 3.13-3.18), Schlick;
+- `_microfacet`: the Trowbridge-Reitz (GGX) distribution with visible-normal sampling;
+- `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, smooth and
+  rough conductor and dielectric, two-sided wrapper.
+
+Conventions: the normal points out of the surface; in the local shading frame it is +z; all
+directions point away from the surface and are unit vectors (assumed, not checked).
+"""
+
+from ._bxdfs import (
+    AbstractBxDF as AbstractBxDF,
+    BSDFSample as BSDFSample,
+    ConductorBxDF as ConductorBxDF,
+    DielectricBxDF as DielectricBxDF,
+    DiffuseBxDF as DiffuseBxDF,
+    OrenNayarBxDF as OrenNayarBxDF,
+    RoughConductorBxDF as RoughConductorBxDF,
+    RoughDielectricBxDF as RoughDielectricBxDF,
+    TwoSidedBxDF as TwoSidedBxDF,
+)
+from ._directions import (
+    Frame as Frame,
+    abs_cos_theta as abs_cos_theta,
+    coordinate_system as coordinate_system,
+    cos2_theta as cos2_theta,
+    cos_phi as cos_phi,
+    cos_theta as cos_theta,
+    face_forward as face_forward,
+    normalize as normalize,
+    reflect as reflect,
+    refract as refract,
+    same_hemisphere as same_hemisphere,
+    sin2_theta as sin2_theta,
+    sin_phi as sin_phi,
+    sin_theta as sin_theta,
+    spherical_direction as spherical_direction,
+    spherical_phi as spherical_phi,
+    spherical_theta as spherical_theta,
+    tan2_theta as tan2_theta,
+    tan_theta as tan_theta,
+    to_local as to_local,
+    to_world as to_world,
+)
+from ._fresnel import (
+    fresnel_complex as fresnel_complex,
+    fresnel_conductor as fresnel_conductor,
+    fresnel_conductor_polarized as fresnel_conductor_polarized,
+    fresnel_dielectric as fresnel_dielectric,
+    fresnel_dielectric_amplitudes as fresnel_dielectric_amplitudes,
+    fresnel_dielectric_polarized as fresnel_dielectric_polarized,
+    fresnel_dielectric_transmittance as fresnel_dielectric_transmittance,
+    fresnel_schlick as fresnel_schlick,
+    fresnel_schlick_f0 as fresnel_schlick_f0,
+)
+from ._microfacet import (
+    TrowbridgeReitzDistribution as TrowbridgeReitzDistribution,
+    roughness_to_alpha as roughness_to_alpha,
+)

@@ -1,0 +1,352 @@
+r"""Image files: OpenEXR (RGB and spectral) and 8-bit sRGB PNG, written atomically.
+
+Every writer goes through a temporary file in the target's directory and `os.replace`, so a
+reader never sees a half-written image and a failed write leaves nothing behind. Writing to a
+path that cannot be written raises the usual `OSError` subclass with the path in the message.
+IO is NumPy-side: arrays in, NumPy arrays out.
+"""
+
+import os
+import struct
+import tempfile
+import zlib
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import numpy as np
+
+# Attributes every OpenEXR header has; user metadata may not use these names.
+_EXR_STANDARD = frozenset(
+    {
+        "channels", "compression", "dataWindow", "displayWindow", "lineOrder",
+        "pixelAspectRatio", "screenWindowCenter", "screenWindowWidth", "type", "tiles",
+        "chunkCount", "name", "version", "view", "multiView",
+    }
+)  # fmt: skip
+SPECTRAL_LAYOUT_VERSION = "1.0"
+EMISSIVE_UNITS = "W.m^-2.sr^-1"
+
+
+def _atomic_write(path, write: Callable[[str], None]) -> Path:
+    """Call `write(tmp)` on a temporary file next to `path`, then rename it onto `path`."""
+    path = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as e:
+        raise type(e)(e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)) from e
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException as e:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(e, OSError):
+            raise type(e)(e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)) from e
+        if isinstance(e, RuntimeError):  # OpenEXR reports IO failures as RuntimeError
+            raise OSError(f"Cannot write image file {str(path)!r}: {e}") from e
+        raise
+    return path
+
+
+def _image(rgb, name: str, channels: int | None = 3) -> np.ndarray:
+    arr = np.asarray(rgb)
+    if arr.dtype.kind not in "fiu":
+        raise TypeError(f"`{name}` must be a numeric array, got dtype {arr.dtype}.")
+    if channels is not None and (arr.ndim != 3 or arr.shape[-1] != channels):
+        raise ValueError(f"`{name}` must have shape (H, W, {channels}), got {arr.shape}.")
+    if arr.ndim != 3 or arr.shape[0] < 1 or arr.shape[1] < 1:
+        raise ValueError(f"`{name}` must have shape (H, W, C) with H, W >= 1, got {arr.shape}.")
+    return arr
+
+
+def _check_metadata(metadata: Mapping | None) -> dict:
+    if metadata is None:
+        return {}
+    if not isinstance(metadata, Mapping):
+        raise TypeError(f"`metadata` must be a mapping of str to values, got {type(metadata).__name__}.")
+    out = {}
+    for key, value in metadata.items():
+        if not isinstance(key, str) or not key:
+            raise TypeError(f"`metadata` keys must be non-empty strings, got {key!r}.")
+        if key in _EXR_STANDARD:
+            raise ValueError(f"`metadata` key {key!r} is a reserved OpenEXR header attribute.")
+        if isinstance(value, bool):
+            value = int(value)
+        if isinstance(value, str | int | float):
+            out[key] = value
+        elif isinstance(value, np.integer | np.floating):
+            out[key] = value.item()
+        elif isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
+            out[key] = list(value)
+        elif isinstance(value, np.ndarray | list | tuple) and np.asarray(value).shape in (
+            (2,), (3,), (3, 3), (4, 4),
+        ):
+            out[key] = np.asarray(value, dtype=np.float32)
+        else:
+            raise TypeError(
+                f"`metadata[{key!r}]` has unsupported type {type(value).__name__}: use str, int, "
+                "float (stored as float32), a list of str, or a float vector/matrix of shape "
+                "(2,), (3,), (3, 3) or (4, 4)."
+            )
+    return out
+
+
+def _write_exr_channels(path, channels: dict[str, np.ndarray], header_extra: dict) -> Path:
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **header_extra}
+
+    def write(tmp: str) -> None:
+        OpenEXR.File(header, channels).write(tmp)
+
+    return _atomic_write(path, write)
+
+
+def write_exr(path, rgb, metadata: Mapping | None = None) -> Path:
+    """Write a linear RGB image as OpenEXR with float32 channels R, G, B (atomically).
+
+    **Arguments:**
+
+    - `path`: output file. [path]
+    - `rgb`: image (H, W, 3), linear (no transfer function); stored as float32, row 0 at
+        the top. [radiance-like]
+    - `metadata`: optional header attributes: str, int, float (stored as float32), list of
+        str, or float vectors/matrices of shape (2,), (3,), (3, 3), (4, 4) (stored as float32).
+        Names of standard OpenEXR attributes are refused.
+
+    **Returns:**
+
+    The written path. Raises `OSError` naming the path when it cannot be written.
+
+    !!! note "Thesis"
+        Section 2.3 (the film's output).
+
+    ??? cite "References"
+        `Kainz2004`.
+    """
+    arr = _image(rgb, "rgb").astype(np.float32)
+    extra = _check_metadata(metadata)
+    channels = {c: np.ascontiguousarray(arr[..., i]) for i, c in enumerate("RGB")}
+    return _write_exr_channels(path, channels, extra)
+
+
+def _read_exr_file(path):
+    import OpenEXR
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(2, f"No such image file: {str(path)!r}", str(path))
+    try:
+        with OpenEXR.File(str(path), separate_channels=True) as f:
+            header = dict(f.header())
+            channels = {name: (ch.pixels, ch.type()) for name, ch in f.channels().items()}
+    except RuntimeError as e:
+        raise ValueError(f"{str(path)!r} is not a readable OpenEXR file: {e}") from e
+    metadata = {k: v for k, v in header.items() if k not in _EXR_STANDARD}
+    return path, channels, metadata
+
+
+def _float_channel(path: Path, channels: dict, name: str) -> np.ndarray:
+    import OpenEXR
+
+    if name not in channels:
+        raise ValueError(
+            f"{str(path)!r}: missing channel {name!r} (has: {', '.join(sorted(channels)) or 'none'})."
+        )
+    pixels, ptype = channels[name]
+    if ptype == OpenEXR.UINT or np.asarray(pixels).dtype.kind != "f":
+        raise ValueError(f"{str(path)!r}: channel {name!r} must be FLOAT or HALF, got {ptype}.")
+    return np.asarray(pixels, dtype=np.float32)
+
+
+def read_exr(path) -> tuple[np.ndarray, dict]:
+    """Read an RGB OpenEXR file written by `write_exr` (or any with float R, G, B channels).
+
+    **Arguments:**
+
+    - `path`: the file. [path]
+
+    **Returns:**
+
+    `(rgb, metadata)`: the image (H, W, 3) as float32 (HALF channels are widened) and the
+    non-standard header attributes. Raises `FileNotFoundError` for a missing file and
+    `ValueError` naming the file for a file that is not OpenEXR, lacks one of R, G, B, or
+    stores one of them as UINT.
+
+    !!! note "Thesis"
+        Section 2.3.
+
+    ??? cite "References"
+        `Kainz2004`.
+    """
+    path, channels, metadata = _read_exr_file(path)
+    rgb = np.stack([_float_channel(path, channels, c) for c in "RGB"], axis=-1)
+    return rgb, metadata
+
+
+def spectral_channel_name(wavelength_nm: float, stokes: int = 0) -> str:
+    """Channel name of an emissive spectral band in Fichet et al.'s layout, e.g. `S0.550,000000nm`.
+
+    The wavelength is printed with six decimals (C++ `std::to_string`) and a comma as decimal
+    separator, because `.` separates layers in OpenEXR channel names.
+
+    **Arguments:**
+
+    - `wavelength_nm`: band centre, > 0. [nm]
+    - `stokes`: Stokes component 0-3 (0 for unpolarised radiance). [dimensionless]
+
+    **Returns:**
+
+    The channel name (str).
+
+    !!! note "Thesis"
+        Section 2.3.
+
+    ??? cite "References"
+        `Fichet2021`.
+    """
+    if stokes not in (0, 1, 2, 3):
+        raise ValueError(f"`stokes` must be 0, 1, 2 or 3, got {stokes!r}.")
+    wl = float(wavelength_nm)
+    if not np.isfinite(wl) or wl <= 0:
+        raise ValueError(f"`wavelength_nm` must be finite and > 0 [nm], got {wl}.")
+    return f"S{stokes}." + f"{wl:.6f}".replace(".", ",") + "nm"
+
+
+def write_spectral_exr(
+    path, spectral, wavelengths_nm, *, rgb=None, metadata: Mapping | None = None
+) -> Path:
+    r"""Write an emissive spectral image in the OpenEXR layout of Fichet et al. (2021).
+
+    One float32 channel per band named `S0.<wavelength>nm` with a decimal comma
+    (`spectral_channel_name`), the header attributes `spectralLayoutVersion = "1.0"` and
+    `emissiveUnits = "W.m^-2.sr^-1"` (as the paper and pbrt-v4's spectral film write them;
+    the channel values are spectral radiance per nm), and optionally an RGB preview in R, G, B.
+
+    **Arguments:**
+
+    - `path`: output file. [path]
+    - `spectral`: image (H, W, n) of spectral radiance. [W m^-2 sr^-1 nm^-1]
+    - `wavelengths_nm`: the n band centres, distinct and > 0. [nm]
+    - `rgb`: optional linear RGB preview (H, W, 3). [radiance-like]
+    - `metadata`: extra header attributes, as in `write_exr`.
+
+    **Returns:**
+
+    The written path.
+
+    !!! note "Thesis"
+        Section 2.3.
+
+    ??? cite "References"
+        `Fichet2021`.
+    """
+    arr = _image(spectral, "spectral", channels=None).astype(np.float32)
+    wl = np.asarray(wavelengths_nm, dtype=np.float64)
+    if wl.ndim != 1 or wl.shape[0] != arr.shape[-1]:
+        raise ValueError(
+            f"`wavelengths_nm` must have shape ({arr.shape[-1]},) to match `spectral` {arr.shape}, "
+            f"got {wl.shape}."
+        )
+    names = [spectral_channel_name(w) for w in wl]
+    if len(set(names)) != len(names):
+        raise ValueError("`wavelengths_nm` must be distinct (at the 1e-6 nm printed precision).")
+    channels = {n: np.ascontiguousarray(arr[..., i]) for i, n in enumerate(names)}
+    if rgb is not None:
+        prev = _image(rgb, "rgb").astype(np.float32)
+        if prev.shape[:2] != arr.shape[:2]:
+            raise ValueError(f"`rgb` {prev.shape} and `spectral` {arr.shape} differ in size.")
+        channels.update({c: np.ascontiguousarray(prev[..., i]) for i, c in enumerate("RGB")})
+    extra = _check_metadata(metadata)
+    extra["spectralLayoutVersion"] = SPECTRAL_LAYOUT_VERSION
+    extra["emissiveUnits"] = EMISSIVE_UNITS
+    return _write_exr_channels(path, channels, extra)
+
+
+def read_spectral_exr(path) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Read the unpolarised emissive bands (`S0.*`) of a Fichet et al. (2021) spectral EXR.
+
+    **Arguments:**
+
+    - `path`: the file. [path]
+
+    **Returns:**
+
+    `(spectral, wavelengths_nm, metadata)`: (H, W, n) float32 sorted by wavelength, the
+    wavelengths (n,) [nm] and the non-standard header attributes. `ValueError` naming the file
+    when it has no `S0.<value>nm` channel or a band is not floating point.
+
+    !!! note "Thesis"
+        Section 2.3.
+
+    ??? cite "References"
+        `Fichet2021`.
+    """
+    path, channels, metadata = _read_exr_file(path)
+    bands = []
+    for name in channels:
+        if name.startswith("S0.") and name.endswith("nm"):
+            try:
+                bands.append((float(name[3:-2].replace(",", ".")), name))
+            except ValueError:
+                continue
+    if not bands:
+        raise ValueError(f"{str(path)!r}: no spectral channel 'S0.<wavelength>nm' found.")
+    bands.sort()
+    spectral = np.stack([_float_channel(path, channels, n) for _, n in bands], axis=-1)
+    return spectral, np.asarray([w for w, _ in bands]), metadata
+
+
+def _png_chunk(kind: bytes, data: bytes) -> bytes:
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+def _srgb_encode(x: np.ndarray) -> np.ndarray:
+    """IEC 61966-2-1 sRGB encoding (the piecewise inverse EOTF) of linear values in [0, 1]."""
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
+
+
+def write_png(path, rgb_linear, exposure: float = 0.0) -> Path:
+    r"""Write linear RGB as an 8-bit sRGB-encoded PNG (atomically).
+
+    Each value is scaled by $2^{\mathrm{exposure}}$, clipped to [0, 1], encoded with the sRGB
+    transfer function (IEC 61966-2-1) and rounded to 8 bits. The PNG carries an `sRGB` chunk.
+    NaN becomes 0.
+
+    **Arguments:**
+
+    - `path`: output file. [path]
+    - `rgb_linear`: image (H, W, 3) in linear sRGB. [radiance-like]
+    - `exposure`: exposure compensation in stops. [EV]
+
+    **Returns:**
+
+    The written path.
+
+    !!! note "Thesis"
+        Section 2.2.2 (sRGB transfer function), section 2.3.
+
+    ??? cite "References"
+        `IEC1999`.
+    """
+    arr = _image(rgb_linear, "rgb_linear").astype(np.float64)
+    exposure = float(exposure)
+    if not np.isfinite(exposure):
+        raise ValueError(f"`exposure` must be finite [EV], got {exposure}.")
+    x = np.clip(np.nan_to_num(arr * 2.0**exposure, nan=0.0, posinf=1.0, neginf=0.0), 0.0, 1.0)
+    img = np.floor(_srgb_encode(x) * 255.0 + 0.5).astype(np.uint8)
+    h, w = img.shape[:2]
+    raw = b"".join(b"\x00" + img[row].tobytes() for row in range(h))  # filter type 0 per row
+    png = (
+        b"\x89PNG\r\n\x1a\n"
+        + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
+        + _png_chunk(b"sRGB", b"\x00")  # rendering intent: perceptual
+        + _png_chunk(b"IDAT", zlib.compress(raw, 6))
+        + _png_chunk(b"IEND", b"")
+    )
+
+    def write(tmp: str) -> None:
+        with open(tmp, "wb") as f:
+            f.write(png)
+
+    return _atomic_write(path, write)

@@ -1,0 +1,204 @@
+r"""Colour models derived from CIE XYZ: CIELAB, CIELCh, CIE 1960 UCS uv, CIE 1976 u'v',
+and the CIE 1931 RGB system (thesis eq. 2.11)."""
+
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float
+
+from .._checks import as_float_array, check_last_axis
+
+# CIE 1976 constants, exact rationals (CIE 015:2018 eq. 8.3-8.5): epsilon = (6/29)^3.
+_DELTA = 6.0 / 29.0
+_EPSILON = _DELTA**3  # 216/24389
+
+# Thesis eq. 2.11 (Wright & Guild / CIE 1931): XYZ = M_RGB RGB, for CIE RGB tristimulus values
+# in the luminance-unit normalisation Y = R + 4.5907 G + 0.0601 B (thesis eq. 2.10). The thesis
+# prints the product with the sides swapped ([R G B] = M [X Y Z]); the rows are those of X, Y, Z.
+MATRIX_CIE_RGB_TO_XYZ = np.array(
+    [
+        [2.768892, 1.751748, 1.130160],
+        [1.000000, 4.590700, 0.060100],
+        [0.000000, 0.056508, 5.594292],
+    ]
+)
+MATRIX_XYZ_TO_CIE_RGB = np.linalg.inv(MATRIX_CIE_RGB_TO_XYZ)
+
+# CIE D65 white, Y = 1, from its CIE 1931 2 deg chromaticity (0.3127, 0.3290) (thesis table 2.1).
+_D65_XYZ = (0.3127 / 0.3290, 1.0, (1.0 - 0.3127 - 0.3290) / 0.3290)
+
+
+def _vec3(x, name):
+    return check_last_axis(as_float_array(x, name), name, 3)
+
+
+def _matmul(M: np.ndarray, v: Array) -> Array:
+    """`M @ v` over the last axis, with the constant matrix in the dtype of `v`."""
+    return v @ jnp.asarray(M.T, dtype=v.dtype)
+
+
+def _white(white_XYZ, dtype):
+    if white_XYZ is None:
+        return jnp.asarray(_D65_XYZ, dtype=dtype)
+    return _vec3(white_XYZ, "white_XYZ").astype(dtype)
+
+
+def _f_lab(t: Array) -> Array:
+    """CIE 1976 lightness function f(t), with the linear segment below (6/29)^3."""
+    big = t > _EPSILON
+    return jnp.where(big, jnp.cbrt(jnp.where(big, t, 1.0)), t / (3.0 * _DELTA**2) + 4.0 / 29.0)
+
+
+def _f_lab_inverse(f: Array) -> Array:
+    return jnp.where(f > _DELTA, f**3, 3.0 * _DELTA**2 * (f - 4.0 / 29.0))
+
+
+def XYZ_to_Lab(XYZ: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array, "*batch 3"]:
+    r"""CIE XYZ -> CIELAB (CIE 1976 L*a*b*).
+
+    $L^* = 116 f(Y/Y_n) - 16$, $a^* = 500(f(X/X_n) - f(Y/Y_n))$, $b^* = 200(f(Y/Y_n) - f(Z/Z_n))$
+    with $f(t) = t^{1/3}$ for $t > (6/29)^3$, else $t/(3 (6/29)^2) + 4/29$.
+
+    **Arguments:**
+
+    - `XYZ`: (..., 3), same scale as the white. [dimensionless, Y = 1 for the white]
+    - `white_XYZ`: reference white (..., 3); default CIE D65 with Y = 1.
+
+    **Returns:**
+
+    Lab (..., 3): L* in [0, 100] for Y in [0, Y_n], a*, b*. [dimensionless]
+
+    ??? cite "References"
+        `CIE2018` section 8.2.1.
+    """
+    XYZ = _vec3(XYZ, "XYZ")
+    w = _white(white_XYZ, XYZ.dtype)
+    f = _f_lab(XYZ / w)
+    fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
+    return jnp.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)
+
+
+def Lab_to_XYZ(Lab: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array, "*batch 3"]:
+    """CIELAB -> CIE XYZ, the exact inverse of `XYZ_to_Lab` (default white D65, Y = 1).
+
+    ??? cite "References"
+        `CIE2018` section 8.2.1.
+    """
+    Lab = _vec3(Lab, "Lab")
+    w = _white(white_XYZ, Lab.dtype)
+    fy = (Lab[..., 0] + 16.0) / 116.0
+    fx = fy + Lab[..., 1] / 500.0
+    fz = fy - Lab[..., 2] / 200.0
+    return _f_lab_inverse(jnp.stack([fx, fy, fz], axis=-1)) * w
+
+
+def _safe_norm2(a: Array, b: Array) -> Array:
+    """sqrt(a^2 + b^2) with a zero (not NaN) gradient at the origin."""
+    r2 = a * a + b * b
+    pos = r2 > 0
+    return jnp.where(pos, jnp.sqrt(jnp.where(pos, r2, 1.0)), 0.0)
+
+
+def _hue_degrees(b: Array, a: Array) -> Array:
+    """atan2(b, a) in degrees in [0, 360); 0 (and zero gradient) at a = b = 0."""
+    zero = (a == 0) & (b == 0)
+    h = jnp.degrees(jnp.arctan2(jnp.where(zero, 0.0, b), jnp.where(zero, 1.0, a)))
+    return jnp.where(zero, 0.0, jnp.mod(h, 360.0))
+
+
+def Lab_to_LCh(Lab: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+    """CIELAB -> CIELCh: L*, chroma C*_ab = sqrt(a*^2 + b*^2), hue h_ab in degrees [0, 360).
+
+    ??? cite "References"
+        `CIE2018` section 8.2.2.
+    """
+    Lab = _vec3(Lab, "Lab")
+    L, a, b = Lab[..., 0], Lab[..., 1], Lab[..., 2]
+    return jnp.stack([L, _safe_norm2(a, b), _hue_degrees(b, a)], axis=-1)
+
+
+def LCh_to_Lab(LCh: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+    """CIELCh -> CIELAB: a* = C cos h, b* = C sin h (h in degrees)."""
+    LCh = _vec3(LCh, "LCh")
+    L, C, h = LCh[..., 0], LCh[..., 1], jnp.radians(LCh[..., 2])
+    return jnp.stack([L, C * jnp.cos(h), C * jnp.sin(h)], axis=-1)
+
+
+def _ratio(num: Array, den: Array) -> Array:
+    zero = den == 0
+    return jnp.where(zero, 0.0, num / jnp.where(zero, 1.0, den))
+
+
+def XYZ_to_UCS_uv(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 2"]:
+    """CIE XYZ -> CIE 1960 UCS chromaticity: u = 4X/(X+15Y+3Z), v = 6Y/(X+15Y+3Z).
+
+    Black gives (0, 0). [dimensionless]
+
+    ??? cite "References"
+        `Wyszecki2000` section 3.3.9; `CIE2018` section 9.1 (CCT is defined in this space).
+    """
+    XYZ = _vec3(XYZ, "XYZ")
+    X, Y, Z = XYZ[..., 0], XYZ[..., 1], XYZ[..., 2]
+    d = X + 15.0 * Y + 3.0 * Z
+    return jnp.stack([_ratio(4.0 * X, d), _ratio(6.0 * Y, d)], axis=-1)
+
+
+def xy_to_UCS_uv(xy: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
+    """xy -> CIE 1960 uv: u = 4x/(-2x+12y+3), v = 6y/(-2x+12y+3). [dimensionless]"""
+    xy = check_last_axis(as_float_array(xy, "xy"), "xy", 2)
+    x, y = xy[..., 0], xy[..., 1]
+    d = -2.0 * x + 12.0 * y + 3.0
+    return jnp.stack([4.0 * x / d, 6.0 * y / d], axis=-1)
+
+
+def UCS_uv_to_xy(uv: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
+    """CIE 1960 uv -> xy: x = 3u/(2u-8v+4), y = 2v/(2u-8v+4). [dimensionless]"""
+    uv = check_last_axis(as_float_array(uv, "uv"), "uv", 2)
+    u, v = uv[..., 0], uv[..., 1]
+    d = 2.0 * u - 8.0 * v + 4.0
+    return jnp.stack([3.0 * u / d, 2.0 * v / d], axis=-1)
+
+
+def XYZ_to_Luv_uv(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 2"]:
+    """CIE XYZ -> CIE 1976 UCS u'v': u' = 4X/(X+15Y+3Z), v' = 9Y/(X+15Y+3Z); black -> (0, 0).
+
+    ??? cite "References"
+        `CIE2018` section 8.1.
+    """
+    XYZ = _vec3(XYZ, "XYZ")
+    X, Y, Z = XYZ[..., 0], XYZ[..., 1], XYZ[..., 2]
+    d = X + 15.0 * Y + 3.0 * Z
+    return jnp.stack([_ratio(4.0 * X, d), _ratio(9.0 * Y, d)], axis=-1)
+
+
+def xy_to_Luv_uv(xy: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
+    """xy -> CIE 1976 u'v': u' = 4x/(-2x+12y+3), v' = 9y/(-2x+12y+3). [dimensionless]"""
+    xy = check_last_axis(as_float_array(xy, "xy"), "xy", 2)
+    x, y = xy[..., 0], xy[..., 1]
+    d = -2.0 * x + 12.0 * y + 3.0
+    return jnp.stack([4.0 * x / d, 9.0 * y / d], axis=-1)
+
+
+def Luv_uv_to_xy(uv: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
+    """CIE 1976 u'v' -> xy: x = 9u'/(6u'-16v'+12), y = 4v'/(6u'-16v'+12). [dimensionless]"""
+    uv = check_last_axis(as_float_array(uv, "uv"), "uv", 2)
+    u, v = uv[..., 0], uv[..., 1]
+    d = 6.0 * u - 16.0 * v + 12.0
+    return jnp.stack([9.0 * u / d, 4.0 * v / d], axis=-1)
+
+
+def CIE_RGB_to_XYZ(RGB: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+    r"""CIE 1931 RGB tristimulus values -> CIE 1931 XYZ (thesis eq. 2.11).
+
+    The RGB values are in the luminance-unit normalisation of the thesis,
+    $Y = L_v = 1.0000 R + 4.5907 G + 0.0601 B$ (eq. 2.10); the same matrix maps the
+    r̄ḡb̄ CMFs to x̄ȳz̄ up to that normalisation.
+
+    ??? cite "References"
+        `CIE1932`; `Wyszecki2000` section 3.3.3; `Broadbent2009`.
+    """
+    return _matmul(MATRIX_CIE_RGB_TO_XYZ, _vec3(RGB, "RGB"))
+
+
+def XYZ_to_CIE_RGB(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+    """CIE 1931 XYZ -> CIE 1931 RGB, the inverse of `CIE_RGB_to_XYZ` (thesis eq. 2.11)."""
+    return _matmul(MATRIX_XYZ_TO_CIE_RGB, _vec3(XYZ, "XYZ"))

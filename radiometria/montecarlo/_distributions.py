@@ -1,0 +1,318 @@
+"""Tabulated distributions: discrete, 1D and 2D piecewise-constant (thesis ch. 5-6).
+
+These sample spectra (1D, over wavelength) and environment maps (2D, over the image plane) in
+proportion to tabulated values; pbrt-v4's `PiecewiseConstant1D/2D` (`Pharr2023` §A.4.1,
+§A.5.6) written as immutable `equinox.Module`s, vectorised over samples.
+"""
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from .._checks import as_float_array, check_last_axis, check_unit_interval
+from .._types import Float, FloatLike, Int
+
+
+def _check_table(f: Array, name: str) -> Array:
+    """Reject negative, non-finite or all-zero tables; statically when concrete, else at run time."""
+    if not isinstance(f, jax.core.Tracer):
+        a = np.asarray(f)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"`{name}` must be finite; got NaN or inf.")
+        if np.any(a < 0):
+            raise ValueError(
+                f"`{name}` must be non-negative; got min {a.min()!r} "
+                "(take the absolute value first if a signed function is meant)."
+            )
+        if not np.any(a > 0):
+            raise ValueError(f"`{name}` must have at least one positive entry; got all zeros.")
+        return f
+    f = eqx.error_if(f, ~jnp.isfinite(f), f"`{name}` must be finite; got NaN or inf.")
+    f = eqx.error_if(f, f < 0, f"`{name}` must be non-negative; got a negative entry.")
+    return eqx.error_if(
+        f, ~jnp.any(f > 0), f"`{name}` must have at least one positive entry; got all zeros."
+    )
+
+
+def _check_bounds(low, high, name: str):
+    low = as_float_array(low, f"{name} low")
+    high = as_float_array(high, f"{name} high")
+    if low.ndim or high.ndim:
+        raise ValueError(f"`{name}` bounds must be scalars, got shapes {low.shape}, {high.shape}.")
+    if not isinstance(low, jax.core.Tracer) and not isinstance(high, jax.core.Tracer):
+        if not float(high) > float(low):
+            raise ValueError(f"`{name}` needs low < high, got [{float(low)}, {float(high)}].")
+    return low, high
+
+
+def _find_interval(cdf: Array, u: Array, row: Array | None = None) -> Array:
+    """Largest `i` in [0, n-1] with `cdf[row, i] <= u`, for `cdf` of shape (rows, n+1).
+
+    A fixed-length binary search (pbrt's `FindInterval`) so that it vectorises and jits.
+    """
+    n = cdf.shape[-1] - 1
+    flat = cdf.reshape(-1)
+    base = jnp.zeros(u.shape, jnp.int32) if row is None else row.astype(jnp.int32) * (n + 1)
+    lo = jnp.zeros(u.shape, jnp.int32)
+    hi = jnp.full(u.shape, n - 1, jnp.int32)
+    for _ in range(max(1, math.ceil(math.log2(n + 1)) + 1)):
+        mid = (lo + hi + 1) // 2
+        ok = flat[base + mid] <= u
+        lo = jnp.where(ok, mid, lo)
+        hi = jnp.where(ok, hi, mid - 1)
+        hi = jnp.maximum(hi, lo)
+    return lo
+
+
+def _unit_clip(x: Array) -> Array:
+    return jnp.clip(x, 0.0, 1.0 - jnp.finfo(x.dtype).epsneg)
+
+
+def sample_discrete(u: FloatLike, weights: FloatLike) -> tuple[Array, Array, Array]:
+    """Pick an index with probability proportional to `weights` and remap `u` for reuse.
+
+    **Arguments:**
+
+    - `u`: uniform variates, any shape, in [0, 1). [dimensionless]
+    - `weights`: non-negative weights, shape `(k,)`, not all 0. [dimensionless]
+
+    **Returns:**
+
+    `(index, pmf, u_remapped)`: int32 indices, their probabilities, and `u` rescaled to [0, 1)
+    within the chosen slot so it can drive a further decision (pbrt's `SampleDiscrete`).
+    [dimensionless]
+
+    ??? cite "References"
+        `Pharr2023` §A.1 (`SampleDiscrete`); thesis ch. 5.
+    """
+    u = check_unit_interval(as_float_array(u, "u"))
+    w = as_float_array(weights, "weights")
+    if w.ndim != 1 or w.shape[0] == 0:
+        raise ValueError(f"`weights` must be a non-empty 1D array, got shape {w.shape}.")
+    w = _check_table(w, "weights")
+    total = jnp.sum(w)
+    cdf = jnp.concatenate([jnp.zeros((1,), w.dtype), jnp.cumsum(w) / total]).astype(u.dtype)
+    idx = _find_interval(cdf[None, :], u)
+    lo, hi = cdf[idx], cdf[idx + 1]
+    pmf = w[idx] / total
+    width = hi - lo
+    u_new = jnp.where(width > 0, (u - lo) / jnp.where(width > 0, width, 1.0), 0.0)
+    return idx, pmf, _unit_clip(u_new)
+
+
+class PiecewiseConstant1D(eqx.Module):
+    """A piecewise-constant density on `[low, high]` proportional to tabulated values.
+
+    Build it with `PiecewiseConstant1D(values, low, high)`; `values` are the function's values
+    on `n` equal bins. `sample(u)` inverts the CDF, `pdf(x)` evaluates the density and
+    `invert(x)` maps a point back to its variate (pbrt's Sample / PDF / Invert triad).
+
+    **Arguments:**
+
+    - `values`: non-negative bin values `(n,)`, not all 0 (e.g. a spectrum). [any unit]
+    - `low`, `high`: the domain, `low < high`. [unit of x, e.g. nm]
+
+    ??? cite "References"
+        `Pharr2023` §A.4.1 (`PiecewiseConstant1D`); thesis ch. 5.
+    """
+
+    func: Float[Array, " n"]
+    cdf: Float[Array, " n+1"]
+    integral: Float[Array, ""]
+    low: Float[Array, ""]
+    high: Float[Array, ""]
+
+    def __init__(self, values: FloatLike, low: FloatLike = 0.0, high: FloatLike = 1.0):
+        f = as_float_array(values, "values")
+        if f.ndim != 1 or f.shape[0] == 0:
+            raise ValueError(f"`values` must be a non-empty 1D array, got shape {f.shape}.")
+        f = _check_table(f, "values")
+        low, high = _check_bounds(low, high, "PiecewiseConstant1D")
+        n = f.shape[0]
+        csum = jnp.concatenate([jnp.zeros((1,), f.dtype), jnp.cumsum(f)])
+        self.func = f
+        self.integral = csum[-1] * (high - low) / n
+        self.cdf = csum / csum[-1]
+        self.low = low
+        self.high = high
+
+    @property
+    def size(self) -> int:
+        """Number of bins."""
+        return self.func.shape[0]
+
+    def sample(self, u: FloatLike) -> tuple[Array, Array, Array]:
+        """Sample `x` by inverting the CDF.
+
+        **Arguments:**
+
+        - `u`: uniform variates, any shape, in [0, 1). [dimensionless]
+
+        **Returns:**
+
+        `(x, pdf, offset)`: the samples [unit of x], their density [1/unit of x], and the int32
+        bin index.
+        """
+        u = check_unit_interval(as_float_array(u, "u"))
+        cdf = self.cdf.astype(u.dtype)
+        o = _find_interval(cdf[None, :], u)
+        c0, c1 = cdf[o], cdf[o + 1]
+        width = c1 - c0
+        du = jnp.where(width > 0, (u - c0) / jnp.where(width > 0, width, 1.0), 0.0)
+        t = (o.astype(u.dtype) + du) / self.size
+        x = self.low + t * (self.high - self.low)
+        pdf = self.func[o] / self.integral
+        return x, pdf, o
+
+    def pdf(self, x: FloatLike) -> Array:
+        """Density at `x` [1/unit of x]; 0 outside `[low, high]`.
+
+        **Arguments:**
+
+        - `x`: points. [unit of x]
+        """
+        x = as_float_array(x, "x")
+        t = (x - self.low) / (self.high - self.low)
+        o = jnp.clip(jnp.floor(t * self.size), 0, self.size - 1).astype(jnp.int32)
+        inside = (t >= 0) & (t <= 1)
+        return jnp.where(inside, self.func[o] / self.integral, 0.0)
+
+    def invert(self, x: FloatLike) -> Array:
+        """The variate `u` in [0, 1) that `sample` maps to `x` [dimensionless].
+
+        **Arguments:**
+
+        - `x`: points in `[low, high]`. [unit of x]
+        """
+        x = as_float_array(x, "x")
+        t = (x - self.low) / (self.high - self.low)
+        ft = t * self.size
+        o = jnp.clip(jnp.floor(ft), 0, self.size - 1).astype(jnp.int32)
+        delta = ft - o.astype(x.dtype)
+        cdf = self.cdf.astype(x.dtype)
+        return _unit_clip(cdf[o] + delta * (cdf[o + 1] - cdf[o]))
+
+
+class PiecewiseConstant2D(eqx.Module):
+    """A piecewise-constant density on a rectangle, proportional to a tabulated image.
+
+    `values[v, u]` holds row `v` (the second coordinate) and column `u` (the first). Sampling
+    draws the row from the marginal density with `u[..., 1]` and the column from that row's
+    conditional density with `u[..., 0]`, as for environment-map importance sampling.
+
+    **Arguments:**
+
+    - `values`: non-negative table `(nv, nu)`, not all 0 (e.g. luminance x sin(theta)).
+        [any unit]
+    - `bounds`: `((x0, x1), (y0, y1))`, the domain; the unit square by default. [unit of x, y]
+
+    ??? cite "References"
+        `Pharr2023` §A.5.6 (`PiecewiseConstant2D`); thesis ch. 5.
+    """
+
+    func: Float[Array, "nv nu"]
+    conditional_cdf: Float[Array, "nv nu+1"]
+    conditional_integral: Float[Array, " nv"]
+    marginal: PiecewiseConstant1D
+    x_bounds: Float[Array, "2"]
+    y_bounds: Float[Array, "2"]
+
+    def __init__(self, values: FloatLike, bounds=((0.0, 1.0), (0.0, 1.0))):
+        f = as_float_array(values, "values")
+        if f.ndim != 2 or 0 in f.shape:
+            raise ValueError(f"`values` must be a non-empty 2D array (nv, nu), got {f.shape}.")
+        f = _check_table(f, "values")
+        try:
+            (x0, x1), (y0, y1) = bounds
+        except (TypeError, ValueError):
+            raise ValueError(f"`bounds` must be ((x0, x1), (y0, y1)), got {bounds!r}.") from None
+        x0, x1 = _check_bounds(x0, x1, "PiecewiseConstant2D x")
+        y0, y1 = _check_bounds(y0, y1, "PiecewiseConstant2D y")
+        nv, nu = f.shape
+        csum = jnp.concatenate([jnp.zeros((nv, 1), f.dtype), jnp.cumsum(f, axis=1)], axis=1)
+        row_total = csum[:, -1]
+        pos = row_total > 0
+        # Rows that are all zero are never sampled; give them a uniform CDF (pbrt does too).
+        uniform = jnp.broadcast_to(jnp.linspace(0.0, 1.0, nu + 1, dtype=f.dtype), csum.shape)
+        cdf = jnp.where(pos[:, None], csum / jnp.where(pos, row_total, 1.0)[:, None], uniform)
+        self.func = f
+        self.conditional_cdf = cdf
+        self.conditional_integral = row_total * (x1 - x0) / nu
+        self.marginal = PiecewiseConstant1D(self.conditional_integral, y0, y1)
+        self.x_bounds = jnp.stack([x0, x1])
+        self.y_bounds = jnp.stack([y0, y1])
+
+    @property
+    def integral(self) -> Array:
+        """Integral of the tabulated function over the domain. [unit of values x area]"""
+        return self.marginal.integral
+
+    def sample(self, u: FloatLike) -> tuple[Float[Array, "*batch 2"], Array, Int[Array, "*batch 2"]]:
+        """Sample a point by the marginal-then-conditional inversion.
+
+        **Arguments:**
+
+        - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
+
+        **Returns:**
+
+        `(p, pdf, offset)`: points `(..., 2)` [unit of x, y], density [1/area], and the int32
+        `(column, row)` cell indices `(..., 2)`.
+        """
+        u = check_unit_interval(check_last_axis(as_float_array(u, "u"), "u", 2))
+        y, pdf_y, iv = self.marginal.sample(u[..., 1])
+        cdf = self.conditional_cdf.astype(u.dtype)
+        nu = self.func.shape[1]
+        u0 = u[..., 0]
+        iu = _find_interval(cdf, u0, iv)
+        c0 = cdf.reshape(-1)[iv * (nu + 1) + iu]
+        c1 = cdf.reshape(-1)[iv * (nu + 1) + iu + 1]
+        width = c1 - c0
+        du = jnp.where(width > 0, (u0 - c0) / jnp.where(width > 0, width, 1.0), 0.0)
+        x0, x1 = self.x_bounds[0], self.x_bounds[1]
+        x = x0 + (iu.astype(u.dtype) + du) / nu * (x1 - x0)
+        pdf_x = self.func[iv, iu] / self.conditional_integral[iv]
+        return jnp.stack([x, y], axis=-1), pdf_x * pdf_y, jnp.stack([iu, iv], axis=-1)
+
+    def pdf(self, p: FloatLike) -> Array:
+        """Density at points `p` `(..., 2)` [1/area]; 0 outside the domain.
+
+        **Arguments:**
+
+        - `p`: points `(..., 2)`. [unit of x, y]
+        """
+        p = check_last_axis(as_float_array(p, "p"), "p", 2)
+        nv, nu = self.func.shape
+        tx = (p[..., 0] - self.x_bounds[0]) / (self.x_bounds[1] - self.x_bounds[0])
+        ty = (p[..., 1] - self.y_bounds[0]) / (self.y_bounds[1] - self.y_bounds[0])
+        iu = jnp.clip(jnp.floor(tx * nu), 0, nu - 1).astype(jnp.int32)
+        iv = jnp.clip(jnp.floor(ty * nv), 0, nv - 1).astype(jnp.int32)
+        inside = (tx >= 0) & (tx <= 1) & (ty >= 0) & (ty <= 1)
+        return jnp.where(inside, self.func[iv, iu] / self.integral, 0.0)
+
+    def invert(self, p: FloatLike) -> Float[Array, "*batch 2"]:
+        """The variates `u` `(..., 2)` in [0, 1) that `sample` maps to `p` [dimensionless].
+
+        **Arguments:**
+
+        - `p`: points `(..., 2)` in the domain. [unit of x, y]
+        """
+        p = check_last_axis(as_float_array(p, "p"), "p", 2)
+        nu = self.func.shape[1]
+        u1 = self.marginal.invert(p[..., 1])
+        ty = (p[..., 1] - self.y_bounds[0]) / (self.y_bounds[1] - self.y_bounds[0])
+        nv = self.func.shape[0]
+        iv = jnp.clip(jnp.floor(ty * nv), 0, nv - 1).astype(jnp.int32)
+        tx = (p[..., 0] - self.x_bounds[0]) / (self.x_bounds[1] - self.x_bounds[0])
+        ft = tx * nu
+        iu = jnp.clip(jnp.floor(ft), 0, nu - 1).astype(jnp.int32)
+        delta = ft - iu.astype(p.dtype)
+        cdf = self.conditional_cdf.astype(p.dtype).reshape(-1)
+        c0 = cdf[iv * (nu + 1) + iu]
+        c1 = cdf[iv * (nu + 1) + iu + 1]
+        u0 = _unit_clip(c0 + delta * (c1 - c0))
+        return jnp.stack([u0, u1], axis=-1)

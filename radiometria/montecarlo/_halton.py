@@ -1,0 +1,248 @@
+"""Halton points: radical inverses in prime bases, and their scrambles (thesis ch. 5).
+
+Coordinate j of point i is the radical inverse of i in the j-th prime base b,
+phi_b(i) = sum_k d_k(i) b^-(k+1) for the base-b digits d_k(i) of i (`Halton1960`).
+
+Scrambles:
+
+- `None`: the plain sequence, bit-for-bit equal to `scipy.stats.qmc.Halton(d, scramble=False)`
+  (the same digit loop in the same floating-point order, first point 0);
+- `"permutation"`: an independent uniform random permutation of {0..b-1} for every digit position,
+  applied to every digit up to the float precision, trailing zeros included (Owen's
+  "randomized Halton", `Owen2017`; what SciPy's `scramble=True` does, with JAX keys);
+- `"owen"`: nested uniform scrambling: each digit is permuted by a hashed permutation whose seed
+  depends on the dimension, the digit position and all less significant digits of i
+  (`Pharr2023` §8.6.3 `OwenScrambledRadicalInverse`, with Kensler's hashed permutations).
+
+The permutation scramble is evaluated with two small tables per dimension: i = q B + r with
+B = b^k about sqrt(n) gives phi(i) = T_lo[r] + T_hi[q], since the digits of r and q do not
+interact; with a static B per dimension the split is a reshape, so no division is done per point.
+"""
+
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from .._checks import check_choice, check_positive_int
+from .._types import Float, Key
+
+SCRAMBLES = (None, "none", "permutation", "owen")
+
+
+@functools.lru_cache(maxsize=8)
+def first_primes(d: int) -> np.ndarray:
+    """The first `d` primes (int64), by a sieve of Eratosthenes."""
+    if d < 6:
+        return np.array([2, 3, 5, 7, 11][:d], dtype=np.int64)
+    limit = int(d * (math.log(d) + math.log(math.log(d)))) + 10  # Rosser's bound
+    sieve = np.ones(limit + 1, dtype=bool)
+    sieve[:2] = False
+    for p in range(2, int(limit**0.5) + 1):
+        if sieve[p]:
+            sieve[p * p :: p] = False
+    return np.flatnonzero(sieve)[:d].astype(np.int64)
+
+
+def _mix32(x: Array) -> Array:
+    """A 32-bit integer finaliser (Wellons' `lowbias32`), standing in for pbrt's 64-bit MixBits."""
+    x = x ^ (x >> np.uint32(16))
+    x = x * np.uint32(0x7FEB352D)
+    x = x ^ (x >> np.uint32(15))
+    x = x * np.uint32(0x846CA68B)
+    return x ^ (x >> np.uint32(16))
+
+
+def permutation_element(i: Array, n: Array, seed: Array) -> Array:
+    """Element `i` of a pseudo-random permutation of {0..n-1} chosen by `seed` (`Kensler2013`).
+
+    uint32 in and out, broadcast; a hashed bijection of the next power of two, cycle-walked until
+    it lands below `n` (vectorised with `lax.while_loop`).
+    """
+    i, n, seed = jnp.broadcast_arrays(i, n, seed)
+    w = n - np.uint32(1)
+    for s in (1, 2, 4, 8, 16):
+        w = w | (w >> np.uint32(s))
+    p = seed
+
+    def hash_once(i):
+        i = i ^ p
+        i = i * np.uint32(0xE170893D)
+        i = i ^ (p >> np.uint32(16))
+        i = i ^ ((i & w) >> np.uint32(4))
+        i = i ^ (p >> np.uint32(8))
+        i = i * np.uint32(0x0929EB3F)
+        i = i ^ (p >> np.uint32(23))
+        i = i ^ ((i & w) >> np.uint32(1))
+        i = i * (np.uint32(1) | (p >> np.uint32(27)))
+        i = i * np.uint32(0x6935FA69)
+        i = i ^ ((i & w) >> np.uint32(11))
+        i = i * np.uint32(0x74DCB303)
+        i = i ^ ((i & w) >> np.uint32(2))
+        i = i * np.uint32(0x9E501CC3)
+        i = i ^ ((i & w) >> np.uint32(2))
+        i = i * np.uint32(0xC860A3DF)
+        i = i & w
+        return i ^ (i >> np.uint32(5))
+
+    def cond(state):
+        _, active = state
+        return jnp.any(active)
+
+    def body(state):
+        cur, active = state
+        nxt = hash_once(cur)
+        return jnp.where(active, nxt, cur), active & (nxt >= n)
+
+    first = hash_once(i)
+    out, _ = jax.lax.while_loop(cond, body, (first, first >= n))
+    return (out + p) % n
+
+
+def _digits_for_precision(bases: np.ndarray, dtype) -> np.ndarray:
+    """Digit positions k with b^-k still visible next to 1 in `dtype` (SciPy's count)."""
+    bits = jnp.finfo(dtype).nmant + 2  # 54 for float64, as SciPy
+    return np.ceil(bits / np.log2(bases)).astype(np.int64) - 1
+
+
+@functools.partial(jax.jit, static_argnames=("n", "d", "skip", "dtype"))
+def _halton_plain(n: int, d: int, skip: int, dtype) -> Array:
+    bases = first_primes(d)
+    b = jnp.asarray(bases.astype(np.uint32))[None, :]
+    bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
+    q = jnp.broadcast_to(
+        (jnp.asarray(skip, jnp.uint32) + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d)
+    )
+    seq = jnp.zeros((n, d), dtype)
+    b2r = jnp.ones((1, d), dtype) / bf
+    # SciPy's loop: seq += (i mod b) / b^k, most significant power last, same rounding order.
+    for _ in range(max(1, math.ceil(math.log2(skip + n)))):
+        rem = q % b
+        seq = seq + jnp.where(q > 0, rem.astype(dtype) * b2r, 0.0)
+        b2r = b2r / bf
+        q = q // b
+    return seq
+
+
+def _permutation_tables(key: Key, bases: np.ndarray, n_digits: np.ndarray) -> Array:
+    """Random permutations (d, K, max_b) of {0..b_j-1} per dimension j and digit position."""
+    d, k_max, b_max = len(bases), int(n_digits.max()), int(bases.max())
+    r = jax.random.uniform(key, (d, k_max, b_max))
+    valid = np.arange(b_max)[None, None, :] < bases[:, None, None]
+    return jnp.argsort(jnp.where(valid, r, 2.0), axis=-1).astype(jnp.int32)
+
+
+def _digit_table(perms: Array, j: int, base: int, n_digits: int, idx: np.ndarray, k0: int, dtype):
+    """sum_{k=k0}^{n_digits-1} perm[j, k, digit_{k-k0}(idx)] base^-(k+1), for integer idx."""
+    q = jnp.asarray(idx)
+    out = jnp.zeros(idx.shape, dtype)
+    scale = float(base) ** -(k0 + 1)
+    for k in range(k0, n_digits):
+        digit = q % base
+        out = out + perms[j, k, digit].astype(dtype) * scale
+        q = q // base
+        scale /= base
+    return out
+
+
+@functools.partial(jax.jit, static_argnames=("n", "d", "skip", "dtype"))
+def _halton_permuted(key: Key, n: int, d: int, skip: int, dtype) -> Array:
+    bases = first_primes(d)
+    n_digits = _digits_for_precision(bases, dtype)
+    perms = _permutation_tables(key, bases, n_digits)
+    end = skip + n
+    cols = []
+    for j, base in enumerate(bases.tolist()):
+        k_lo = max(1, math.ceil(math.log(max(end, 2), base) / 2))
+        block = base**k_lo
+        first = skip - skip % block
+        n_hi = -(-(end - first) // block)
+        t_lo = _digit_table(perms, j, base, min(k_lo, n_digits[j]), np.arange(block), 0, dtype)
+        hi_idx = np.arange(first // block, first // block + n_hi)
+        t_hi = _digit_table(perms, j, base, int(n_digits[j]), hi_idx, k_lo, dtype)
+        col = (t_hi[:, None] + t_lo[None, :]).reshape(-1)[skip - first : skip - first + n]
+        cols.append(col)
+    x = jnp.stack(cols, axis=1)
+    return jnp.minimum(x, 1.0 - jnp.finfo(dtype).epsneg)
+
+
+@functools.partial(jax.jit, static_argnames=("n", "d", "skip", "dtype"))
+def _halton_owen(key: Key, n: int, d: int, skip: int, dtype) -> Array:
+    bases = first_primes(d)
+    n_digits = _digits_for_precision(bases, dtype)
+    b = jnp.asarray(bases.astype(np.uint32))[None, :]
+    seeds = jax.random.bits(key, (1, d), jnp.uint32)
+    q = jnp.broadcast_to(
+        (jnp.asarray(skip, jnp.uint32) + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d)
+    )
+    nd = jnp.asarray(n_digits)[None, :]
+    prefix = jnp.zeros((n, d), jnp.uint32)  # hash of the less significant digits seen so far
+    out = jnp.zeros((n, d), dtype)
+    scale = jnp.ones((1, d), dtype) / jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
+    bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
+    for k in range(int(n_digits.max())):
+        digit = q % b
+        h = _mix32(seeds ^ _mix32(prefix ^ np.uint32((k * 0x9E3779B9) & 0xFFFFFFFF)))
+        pd = permutation_element(digit, b, h)
+        live = k < nd
+        out = out + jnp.where(live, pd.astype(dtype) * scale, 0.0)
+        prefix = _mix32(prefix + digit + np.uint32(1))
+        q = q // b
+        scale = scale / bf
+    return jnp.minimum(out, 1.0 - jnp.finfo(dtype).epsneg)
+
+
+def halton(
+    n: int,
+    d: int,
+    *,
+    scramble: str | None = None,
+    key: Key | None = None,
+    skip: int = 0,
+    dtype=None,
+) -> Float[Array, "n d"]:
+    r"""The first `n` points of the `d`-dimensional Halton sequence, optionally scrambled.
+
+    Dimension j uses the j-th prime as base. Unscrambled points equal
+    `scipy.stats.qmc.Halton(d, scramble=False)` bit for bit in float64.
+
+    **Arguments:**
+
+    - `n`: number of points. [dimensionless]
+    - `d`: dimension >= 1 (no upper limit; high dimensions of plain Halton are poor). [dimensionless]
+    - `scramble`: `None` (or `"none"`), `"permutation"` (random digit permutations, Owen 2017,
+      as SciPy's `scramble=True`) or `"owen"` (nested uniform scrambling with hashed
+      permutations, pbrt-v4's `OwenScrambledRadicalInverse`).
+    - `key`: `jax.random` key; required by the scrambles, refused without one.
+    - `skip`: index of the first point. [dimensionless]
+    - `dtype`: floating dtype of the result (JAX's default float by default).
+
+    **Returns:**
+
+    Points `(n, d)` in [0, 1). [dimensionless]
+
+    ??? cite "References"
+        `Halton1960`; `Owen2017`; `Kensler2013`; `Pharr2023` §8.6; thesis ch. 5.
+    """
+    n = check_positive_int(n, "n")
+    d = check_positive_int(d, "d")
+    skip = check_positive_int(skip, "skip", minimum=0)
+    if skip + n > 2**32:
+        raise ValueError(f"`skip + n` = {skip + n} exceeds 2^32 points.")
+    check_choice(scramble, "scramble", SCRAMBLES)
+    scramble = None if scramble == "none" else scramble
+    if scramble is not None and key is None:
+        raise ValueError(f"scramble={scramble!r} needs a `key`.")
+    if scramble is None and key is not None:
+        raise ValueError("A `key` was given but `scramble` is None; pass scramble='owen' (or another).")
+    dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
+    if not jnp.issubdtype(dtype, jnp.floating):
+        raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
+    if scramble is None:
+        return _halton_plain(n, d, skip, dtype)
+    if scramble == "permutation":
+        return _halton_permuted(key, n, d, skip, dtype)
+    return _halton_owen(key, n, d, skip, dtype)

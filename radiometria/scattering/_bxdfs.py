@@ -1,0 +1,897 @@
+r"""BxDFs: the BRDF of thesis eq. 3.4 and its transmissive counterpart, with sampling and pdfs.
+
+Every BxDF is an `equinox.Module` in the local shading frame (normal $+z$, thesis convention:
+the normal points out of the surface) with three methods, as pbrt's `BxDF`:
+
+- `f(wo, wi)`: the BxDF value $f(\omega_o, \omega_i) = dL_o/(L_i\cos\theta_i\,d\omega_i)$
+  (thesis eq. 3.4): **without** the cosine factor $|\cos\theta_i|$. Shape `(..., n_lambda)`.
+  Mitsuba's `BSDF.eval` returns $f\,|\cos\theta_i|$ instead.
+- `sample_f(wo, u_lobe, u2)`: one importance sample as a `BSDFSample` (value, direction, pdf,
+  delta flag, ...), like pbrt's `Sample_f`. The Monte Carlo weight of the sample is
+  `f * |wi_z| / pdf` (`BSDFSample.weight()`).
+- `pdf(wo, wi)`: the solid-angle density of `sample_f` producing `wi`, `(...)`. Delta
+  (specular) lobes give 0 here, as their density is not a function.
+
+Directions `wo` (towards the viewer, i.e. the direction radiance leaves in) and `wi` (towards
+the light) both point away from the surface and are unit vectors (not checked: see
+`radiometria.scattering` for the policy). Batch axes of the directions, the uniform variates and
+the BxDF's parameters broadcast together.
+
+**Spectral parameters.** Reflectances, `eta` and `k` are arrays `(..., n_lambda)` over the
+wavelengths a renderer carries (4 hero wavelengths in `radiometria.render`); a scalar parameter
+counts as `n_lambda = 1` and broadcasts against any wavelength count downstream. Roughness
+(`alpha`) and Oren-Nayar's `sigma` are not spectral, shape `(...)`.
+
+**Dispersion.** A dielectric whose `eta` varies across the wavelengths refracts each wavelength
+into a different direction. `f` and `pdf` are exact per wavelength; `sample_f` chooses the
+direction with the first ("hero") wavelength, `eta[..., 0]`, and reports the hero's pdf.
+Reflection serves every wavelength (its direction does not depend on `eta`); for a
+*transmission* sample the secondary wavelengths get `f = 0` and `terminate_secondary = True`, as
+pbrt does (`SampledWavelengths::TerminateSecondary`): from then on the path carries the hero
+wavelength only, and the renderer must reweight it (pbrt divides the hero's wavelength pdf by
+`n_lambda`). A constant `eta` (the common case) never terminates.
+
+**Sidedness.** As in pbrt, the reflective BxDFs here are symmetric: they reflect in whichever
+hemisphere `wo` lies. `TwoSidedBxDF(front, back)` gives the two sides different BxDFs, each
+evaluated in its own frame (Mitsuba's `twosided`).
+
+**Failed samples** (e.g. a microfacet that reflects below the horizon, `wo` exactly grazing)
+have `pdf = 0` and `f = 0`; a renderer terminates the path there.
+
+**Parameter validation** happens once, in each constructor (out-of-range values raise, also
+under `jit`, via `equinox.error_if`); the methods themselves do no checks, for speed. Uniform
+variates are expected in [0, 1).
+"""
+
+import abc
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from .._checks import as_float_array, check_choice, check_in_range
+from ._directions import _safe_sqrt
+from ._fresnel import _amplitudes, _check_eta, _check_k, _fr_conductor, _fr_dielectric
+from ._microfacet import TrowbridgeReitzDistribution, _check_alpha
+
+__all__ = [
+    "AbstractBxDF",
+    "BSDFSample",
+    "ConductorBxDF",
+    "DielectricBxDF",
+    "DiffuseBxDF",
+    "OrenNayarBxDF",
+    "RoughConductorBxDF",
+    "RoughDielectricBxDF",
+    "TwoSidedBxDF",
+]
+
+_MODES = ("radiance", "importance")
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers
+
+
+def _spectral(x, name: str) -> Array:
+    """A per-wavelength parameter: at least 1-D, wavelengths on the last axis."""
+    x = as_float_array(x, name)
+    return x[None] if x.ndim == 0 else x
+
+
+def _broadcast(*items: tuple[Array, int]) -> tuple[tuple[int, ...], list[Array]]:
+    """Broadcast arrays over their batch axes; each item is (array, number of core axes)."""
+    shapes = [a.shape[: a.ndim - k] for a, k in items]
+    try:
+        batch = tuple(np.broadcast_shapes(*shapes))
+    except ValueError:
+        raise ValueError(f"Batch shapes do not broadcast: {shapes}.") from None
+    return batch, [jnp.broadcast_to(a, batch + a.shape[a.ndim - k :]) for a, k in items]
+
+
+def _spectral_pair(a: Array, b: Array) -> tuple[Array, Array]:
+    """Broadcast two spectral parameters to a common shape (checked at construction)."""
+    try:
+        shape = np.broadcast_shapes(a.shape, b.shape)
+    except ValueError:
+        raise ValueError(f"Spectral parameters do not broadcast: {a.shape} and {b.shape}.") from None
+    return jnp.broadcast_to(a, shape), jnp.broadcast_to(b, shape)
+
+
+def _dirs(*ws) -> list[Array]:
+    out = []
+    for name, w in ws:
+        w = as_float_array(w, name)
+        if w.ndim == 0 or w.shape[-1] != 3:
+            raise ValueError(f"`{name}` must have a last axis of length 3, got shape {w.shape}.")
+        out.append(w)
+    return out
+
+
+def _u2(u2) -> Array:
+    u2 = as_float_array(u2, "u2")
+    if u2.ndim == 0 or u2.shape[-1] != 2:
+        raise ValueError(f"`u2` must have a last axis of length 2, got shape {u2.shape}.")
+    return u2
+
+
+def _safe_div(a: Array, b: Array) -> Array:
+    """a / b, and 0 where b == 0 (finite gradients)."""
+    ok = b != 0
+    return jnp.where(ok, a / jnp.where(ok, b, 1.0), 0.0)
+
+
+def _normalize3(x: Array, y: Array, z: Array) -> tuple[Array, Array, Array, Array]:
+    """Normalise a vector given by components; returns (x, y, z, ok) with ok False for zero."""
+    n2 = x * x + y * y + z * z
+    ok = n2 > 0
+    inv = jnp.where(ok, 1.0 / jnp.sqrt(jnp.where(ok, n2, 1.0)), 0.0)
+    return x * inv, y * inv, z * inv, ok
+
+
+def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array]:
+    """Malley's method on Shirley-Chiu's concentric disk mapping (pbrt-v4 A.5.3); returns x, y, z >= 0."""
+    a = 2.0 * u0 - 1.0
+    b = 2.0 * u1 - 1.0
+    use_a = jnp.abs(a) > jnp.abs(b)
+    r = jnp.where(use_a, a, b)
+    safe_a = jnp.where(a == 0, 1.0, a)
+    safe_b = jnp.where(b == 0, 1.0, b)
+    theta = jnp.where(
+        use_a, (jnp.pi / 4.0) * (b / safe_a), (jnp.pi / 2.0) - (jnp.pi / 4.0) * (a / safe_b)
+    )
+    zero = (a == 0) & (b == 0)
+    x = jnp.where(zero, 0.0, r * jnp.cos(theta))
+    y = jnp.where(zero, 0.0, r * jnp.sin(theta))
+    z = _safe_sqrt(1.0 - x * x - y * y)
+    return x, y, z
+
+
+def _check_mode(mode: str) -> str:
+    return check_choice(mode, "mode", _MODES)
+
+
+class BSDFSample(eqx.Module):
+    """Result of `AbstractBxDF.sample_f` (pbrt's `BSDFSample`).
+
+    **Fields:**
+
+    - `f`: BxDF value for the sampled pair, `(..., n_lambda)`, without the cosine factor.
+        For a delta lobe it is the value that makes `f * |wi_z| / pdf` the sample weight, i.e.
+        `F / |cos theta_i|` (`Pharr2023` section 9.2). [sr^-1]
+    - `wi`: sampled direction `(..., 3)`, local frame, pointing away from the surface. [unit vector]
+    - `pdf`: solid-angle density of `wi`, `(...)`; for a delta lobe the discrete probability of
+        choosing that lobe. 0 marks a failed sample. [sr^-1 or dimensionless]
+    - `is_delta`: True for a specular (Dirac delta) lobe, `(...)`. Such samples must not be
+        combined with light sampling by MIS.
+    - `is_transmission`: True when `wi` lies on the other side of the surface, `(...)`.
+    - `eta`: relative index of refraction crossed, $\\eta_t/\\eta_i$ seen from `wo`'s side
+        (1 for reflection), `(...)`, for Russian roulette bookkeeping as in pbrt. [dimensionless]
+    - `terminate_secondary`: True when only the hero wavelength (index 0) is valid from this
+        sample on (transmission through a dispersive dielectric), `(...)`.
+    """
+
+    f: Array
+    wi: Array
+    pdf: Array
+    is_delta: Array
+    is_transmission: Array
+    eta: Array
+    terminate_secondary: Array
+
+    def weight(self) -> Array:
+        """Monte Carlo weight `f |cos theta_i| / pdf`, `(..., n_lambda)`; 0 for a failed sample."""
+        return _safe_div(self.f * jnp.abs(self.wi[..., 2:3]), self.pdf[..., None])
+
+
+def _failed_or(ok: Array, s: BSDFSample) -> BSDFSample:
+    """Zero f and pdf where `ok` is False."""
+    return BSDFSample(
+        f=jnp.where(ok[..., None], s.f, 0.0),
+        wi=s.wi,
+        pdf=jnp.where(ok, s.pdf, 0.0),
+        is_delta=s.is_delta,
+        is_transmission=s.is_transmission & ok,
+        eta=jnp.where(ok, s.eta, 1.0),
+        terminate_secondary=s.terminate_secondary & ok,
+    )
+
+
+class AbstractBxDF(eqx.Module):
+    """Interface of every BxDF: `f`, `sample_f`, `pdf` in the local shading frame (normal +z)."""
+
+    @abc.abstractmethod
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        """BxDF value $f(\\omega_o, \\omega_i)$ (thesis eq. 3.4), `(..., n_lambda)`. [sr^-1]"""
+
+    @abc.abstractmethod
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        """Importance-sample `wi` given `wo`, with `u_lobe` `(...)` and `u2` `(..., 2)` in [0, 1)."""
+
+    @abc.abstractmethod
+    def pdf(self, wo, wi) -> Array:
+        """Solid-angle density of `sample_f` producing `wi` (0 for delta lobes), `(...)`. [sr^-1]"""
+
+
+# --------------------------------------------------------------------------------------------
+# Lambertian
+
+
+class DiffuseBxDF(AbstractBxDF):
+    r"""Lambertian reflection, $f = R/\pi$ (thesis section 3.1, "Diffuse Reflection").
+
+    A Lambertian surface reflects radiance equally in all directions; the reflected radiance
+    follows Lambert's cosine law in intensity. Its directional-hemispherical reflectance is $R$
+    for every incident direction. Sampled with the cosine-weighted hemisphere,
+    $p(\omega_i) = |\cos\theta_i|/\pi$, so the sample weight is exactly $R$.
+
+    **Fields:**
+
+    - `reflectance`: $R$ in [0, 1], `(..., n_lambda)`. [dimensionless]
+
+    !!! note "Thesis"
+        Section 3.1 (diffuse reflection), eq. (3.4).
+
+    ??? cite "References"
+        `Lambert1760`; `Pharr2023` section 9.2.
+    """
+
+    reflectance: Array
+
+    def __init__(self, reflectance):
+        r = _spectral(reflectance, "reflectance")
+        self.reflectance = check_in_range(r, "reflectance", 0.0, 1.0, unit="dimensionless")
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, r) = _broadcast((wo, 1), (wi, 1), (self.reflectance, 1))
+        same = wo[..., 2] * wi[..., 2] > 0
+        return jnp.where(same[..., None], r * (1.0 / jnp.pi), 0.0)
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, u_lobe, u2, r) = _broadcast((wo, 1), (u_lobe, 0), (u2, 1), (self.reflectance, 1))
+        x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
+        # Sample in wo's hemisphere.
+        z = jnp.where(wo[..., 2] < 0, -z, z)
+        wi = jnp.stack([x, y, z], axis=-1)
+        ok = (wo[..., 2] != 0) & (z != 0)
+        s = BSDFSample(
+            f=jnp.broadcast_to(r * (1.0 / jnp.pi), r.shape),
+            wi=wi,
+            pdf=jnp.abs(z) * (1.0 / jnp.pi),
+            is_delta=jnp.zeros(z.shape, bool),
+            is_transmission=jnp.zeros(z.shape, bool),
+            eta=jnp.ones_like(z),
+            terminate_secondary=jnp.zeros(z.shape, bool),
+        )
+        return _failed_or(ok, s)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi) = _broadcast((wo, 1), (wi, 1))
+        batch = np.broadcast_shapes(wo.shape[:-1], self.reflectance.shape[:-1])
+        same = wo[..., 2] * wi[..., 2] > 0
+        return jnp.broadcast_to(jnp.where(same, jnp.abs(wi[..., 2]) * (1.0 / jnp.pi), 0.0), batch)
+
+
+# --------------------------------------------------------------------------------------------
+# Oren-Nayar
+
+
+class OrenNayarBxDF(AbstractBxDF):
+    r"""Oren-Nayar reflection from rough Lambertian V-cavities (qualitative model).
+
+    $$f = \frac{R}{\pi}\left(A + B\max(0, \cos(\varphi_i - \varphi_o))\sin\alpha\tan\beta\right),$$
+    $$A = 1 - \frac{\sigma^2}{2(\sigma^2 + 0.33)},\quad B = \frac{0.45\sigma^2}{\sigma^2 + 0.09},
+      \quad \alpha = \max(\theta_i,\theta_o),\ \beta = \min(\theta_i,\theta_o).$$
+
+    Reciprocal; $\sigma = 0$ gives the Lambertian BRDF. The model loses some energy
+    (directional albedo < R for $\sigma > 0$), which is physical for a rough surface without
+    interreflections. Sampled with the cosine-weighted hemisphere.
+
+    **Fields:**
+
+    - `reflectance`: $R$ in [0, 1], `(..., n_lambda)`. [dimensionless]
+    - `sigma`: standard deviation of the facet slope angle, in [0, pi/2], `(...)`. [rad]
+
+    !!! note "Thesis"
+        Section 3.1 (diffuse and retroreflective reflection), eq. (3.4).
+
+    ??? cite "References"
+        `Oren1994`; `Pharr2016` section 8.4.2.
+    """
+
+    reflectance: Array
+    sigma: Array
+
+    def __init__(self, reflectance, sigma):
+        r = _spectral(reflectance, "reflectance")
+        self.reflectance = check_in_range(r, "reflectance", 0.0, 1.0, unit="dimensionless")
+        s = as_float_array(sigma, "sigma")
+        self.sigma = check_in_range(s, "sigma", 0.0, float(np.pi / 2), unit="rad")
+
+    def _AB(self, sigma: Array) -> tuple[Array, Array]:
+        s2 = sigma * sigma
+        return 1.0 - s2 / (2.0 * (s2 + 0.33)), 0.45 * s2 / (s2 + 0.09)
+
+    def _value(self, wo: Array, wi: Array, r: Array, sigma: Array) -> Array:
+        A, B = self._AB(sigma)
+        zo, zi = jnp.abs(wo[..., 2]), jnp.abs(wi[..., 2])
+        # cos(phi_i - phi_o) sin(theta_i) sin(theta_o) = wi_xy . wo_xy
+        dxy = wi[..., 0] * wo[..., 0] + wi[..., 1] * wo[..., 1]
+        max_cos_times_sins = jnp.maximum(0.0, dxy)
+        # sin(alpha) tan(beta) = sin_a sin_b / cos_b with beta the angle nearer the normal
+        # (larger |cos|); multiplied by cos(dphi) the sines cancel into the dot product.
+        cos_b = jnp.maximum(zo, zi)
+        term = _safe_div(max_cos_times_sins, cos_b)
+        same = wo[..., 2] * wi[..., 2] > 0
+        v = (A + B * term)[..., None] * r * (1.0 / jnp.pi)
+        return jnp.where(same[..., None], v, 0.0)
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, r, sigma) = _broadcast(
+            (wo, 1), (wi, 1), (self.reflectance, 1), (self.sigma, 0)
+        )
+        return self._value(wo, wi, r, sigma)
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, u_lobe, u2, r, sigma) = _broadcast(
+            (wo, 1), (u_lobe, 0), (u2, 1), (self.reflectance, 1), (self.sigma, 0)
+        )
+        x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
+        z = jnp.where(wo[..., 2] < 0, -z, z)
+        wi = jnp.stack([x, y, z], axis=-1)
+        ok = (wo[..., 2] != 0) & (z != 0)
+        s = BSDFSample(
+            f=self._value(wo, wi, r, sigma),
+            wi=wi,
+            pdf=jnp.abs(z) * (1.0 / jnp.pi),
+            is_delta=jnp.zeros(z.shape, bool),
+            is_transmission=jnp.zeros(z.shape, bool),
+            eta=jnp.ones_like(z),
+            terminate_secondary=jnp.zeros(z.shape, bool),
+        )
+        return _failed_or(ok, s)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, _s) = _broadcast((wo, 1), (wi, 1), (self.sigma, 0))
+        same = wo[..., 2] * wi[..., 2] > 0
+        batch = np.broadcast_shapes(wo.shape[:-1], self.reflectance.shape[:-1])
+        return jnp.broadcast_to(jnp.where(same, jnp.abs(wi[..., 2]) * (1.0 / jnp.pi), 0.0), batch)
+
+
+# --------------------------------------------------------------------------------------------
+# Smooth conductor
+
+
+class ConductorBxDF(AbstractBxDF):
+    r"""Smooth conductor: perfect specular reflection weighted by the conductor Fresnel term.
+
+    $f(\omega_o, \omega_i) = F_r(\cos\theta_o; \eta, \kappa)\,
+    \delta(\omega_i - \omega_r)/|\cos\theta_i|$, with $\omega_r$ the mirror direction
+    (thesis eq. 3.7-3.8) and $F_r$ from thesis eq. 3.13-3.18. `f` and `pdf` are 0 (a delta
+    lobe); `sample_f` returns the mirror direction with `pdf = 1`, `is_delta = True`.
+
+    **Fields:**
+
+    - `eta`, `k`: relative complex index of refraction $\eta + i\kappa$ of the metal over the
+        outside medium, `(..., n_lambda)`, `eta > 0`, `k >= 0` (see `radiometria.scattering.ior`). [dimensionless]
+
+    !!! note "Thesis"
+        Section 3.1 ("Perfectly Specular Reflection"), 3.1.1, eq. (3.7)-(3.8), (3.13)-(3.18).
+
+    ??? cite "References"
+        `Pharr2023` section 9.3.
+    """
+
+    eta: Array
+    k: Array
+
+    def __init__(self, eta, k):
+        eta = _check_eta(_spectral(eta, "eta"))
+        k = _check_k(_spectral(k, "k"))
+        self.eta, self.k = _spectral_pair(eta, k)
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
+        return jnp.zeros(batch + self.eta.shape[-1:], self.eta.dtype)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
+        return jnp.zeros(batch, jnp.result_type(wo.dtype, self.eta.dtype))
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, _u, _v, eta, k) = _broadcast(
+            (wo, 1), (u_lobe, 0), (u2, 1), (self.eta, 1), (self.k, 1)
+        )
+        wi = wo * jnp.asarray([-1.0, -1.0, 1.0], wo.dtype)
+        c = jnp.abs(wi[..., 2])
+        F = _fr_conductor(c[..., None], eta, k)
+        ok = c > 0
+        s = BSDFSample(
+            f=_safe_div(F, c[..., None]),
+            wi=wi,
+            pdf=jnp.ones_like(c),
+            is_delta=jnp.ones(c.shape, bool),
+            is_transmission=jnp.zeros(c.shape, bool),
+            eta=jnp.ones_like(c),
+            terminate_secondary=jnp.zeros(c.shape, bool),
+        )
+        return _failed_or(ok, s)
+
+
+# --------------------------------------------------------------------------------------------
+# Smooth dielectric
+
+
+def _dispersive(eta: Array) -> Array:
+    """True where eta differs across the wavelength axis, `(...)`."""
+    return jnp.any(eta != eta[..., :1], axis=-1)
+
+
+def _hero_only(x: Array) -> Array:
+    """Zero all but the first entry of the last axis."""
+    mask = jnp.arange(x.shape[-1]) == 0
+    return jnp.where(mask, x, 0.0)
+
+
+class DielectricBxDF(AbstractBxDF):
+    r"""Smooth dielectric interface: specular reflection and refraction (thesis 3.1.1).
+
+    One of the two delta lobes is chosen with probability $F_r$ (reflection, thesis eq. 3.18)
+    or $1 - F_r$ (transmission):
+
+    - reflection: $\omega_i = \omega_r$ (eq. 3.8), $f = F_r/|\cos\theta_i|$, pdf $= F_r$;
+    - transmission: $\omega_i = \omega_t$ (eq. 3.12), $f = (1 - F_r)/|\cos\theta_i| \cdot
+      1/\eta'^2$ in radiance transport, pdf $= 1 - F_r$,
+
+    where $\eta'$ is the relative index $\eta_t/\eta_i$ seen from `wo`'s side ($\eta$ for `wo`
+    outside, $1/\eta$ inside). The factor $1/\eta'^2$ is the $(\eta_t/\eta_i)^2$ radiance factor
+    of thesis eq. 3.15-3.16 written for light travelling from `wi` to `wo` (the radiance that
+    arrives at `wo`'s side is scaled by $(\eta_{wo}/\eta_{wi})^2 = 1/\eta'^2$; see
+    `fresnel_dielectric_transmittance`). It is omitted for `mode="importance"`.
+
+    Total internal reflection makes $F_r = 1$. `eta = 1` (index matched) transmits straight
+    through. For spectrally varying `eta` see the module notes on dispersion.
+
+    **Fields:**
+
+    - `eta`: relative index of refraction $\eta_t/\eta_i$ of the inside over the outside
+        (the side the normal points to), > 0, `(..., n_lambda)`. [dimensionless]
+
+    !!! note "Thesis"
+        Section 3.1.1, eq. (3.7)-(3.18).
+
+    ??? cite "References"
+        `Pharr2023` section 9.5; `Walter2007`.
+    """
+
+    eta: Array
+
+    def __init__(self, eta):
+        self.eta = _check_eta(_spectral(eta, "eta"))
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
+        return jnp.zeros(batch + self.eta.shape[-1:], self.eta.dtype)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
+        return jnp.zeros(batch, jnp.result_type(wo.dtype, self.eta.dtype))
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, u_lobe, _v, eta) = _broadcast((wo, 1), (u_lobe, 0), (u2, 1), (self.eta, 1))
+        cos_o = wo[..., 2]
+        # Per-wavelength Fresnel terms; the hero wavelength (index 0) chooses the lobe.
+        r_s, r_p, _, _, etap = _amplitudes(cos_o[..., None], eta)
+        R = 0.5 * (r_s * r_s + r_p * r_p)
+        T = 1.0 - R
+        R_h, etap_h = R[..., 0], etap[..., 0]
+        reflect = u_lobe < R_h
+        # Reflection about +z (thesis eq. 3.8).
+        wr = wo * jnp.asarray([-1.0, -1.0, 1.0], wo.dtype)
+        # Refraction (thesis eq. 3.12) through +z with the hero's relative index.
+        sin2_t = (1.0 - cos_o * cos_o) / (etap_h * etap_h)
+        cos_t = _safe_sqrt(1.0 - sin2_t)
+        cos_t = jnp.where(cos_o < 0, cos_t, -cos_t)  # opposite side of wo
+        wt = jnp.stack([-wo[..., 0] / etap_h, -wo[..., 1] / etap_h, cos_t], axis=-1)
+        wi = jnp.where(reflect[..., None], wr, wt)
+        c = jnp.abs(wi[..., 2])
+        ft = T if mode == "importance" else T / (etap * etap)
+        disp = _dispersive(eta)
+        ft = jnp.where(disp[..., None], _hero_only(ft), ft)
+        f = _safe_div(jnp.where(reflect[..., None], R, ft), c[..., None])
+        pdf = jnp.where(reflect, R_h, 1.0 - R_h)
+        ok = (c > 0) & (pdf > 0)
+        s = BSDFSample(
+            f=f,
+            wi=wi,
+            pdf=pdf,
+            is_delta=jnp.ones(c.shape, bool),
+            is_transmission=~reflect,
+            eta=jnp.where(reflect, 1.0, etap_h),
+            terminate_secondary=~reflect & disp,
+        )
+        return _failed_or(ok, s)
+
+
+# --------------------------------------------------------------------------------------------
+# Rough conductor (GGX)
+
+
+def _check_masking(masking: str) -> str:
+    return check_choice(masking, "masking", ("height_correlated", "separable"))
+
+
+class RoughConductorBxDF(AbstractBxDF):
+    r"""Rough conductor: Torrance-Sparrow microfacet BRDF with the Trowbridge-Reitz (GGX) distribution.
+
+    $$f(\omega_o, \omega_i) = \frac{D(\omega_h)\,F_r(|\omega_o\cdot\omega_h|)\,G(\omega_o, \omega_i)}
+      {4\,|\cos\theta_o|\,|\cos\theta_i|},\qquad \omega_h = \frac{\omega_o + \omega_i}{\|\omega_o + \omega_i\|}$$
+
+    $F_r$ is the conductor Fresnel term (thesis eq. 3.13-3.18), $D$ the GGX distribution and
+    $G$ Smith's masking-shadowing: height-correlated (`masking="height_correlated"`, pbrt-v4,
+    `Heitz2014`) or separable $G_1G_1$ (`masking="separable"`, Mitsuba 3). Sampled with the
+    distribution of visible normals (`Heitz2018`):
+    $p(\omega_i) = D_{\omega_o}(\omega_h)/(4|\omega_o\cdot\omega_h|)$.
+
+    Single scattering only: energy reflected more than once between microfacets is lost, so
+    the white-furnace albedo is below 1 for rough surfaces (see `fig_3_albedo_roughness`).
+
+    **Fields:**
+
+    - `alpha_x`, `alpha_y`: GGX roughness in (0, 1], `(...)` (`alpha_y` defaults to `alpha_x`).
+        [dimensionless]
+    - `eta`, `k`: relative complex index of refraction, `(..., n_lambda)`. [dimensionless]
+    - `masking`: `"height_correlated"` (default) or `"separable"`.
+
+    !!! note "Thesis"
+        Section 3.1 ("Glossy Specular Reflection"), eq. (3.4), (3.13)-(3.18).
+
+    ??? cite "References"
+        `Torrance1967`; `Walter2007`; `Heitz2014`; `Heitz2018`; `Pharr2023` section 9.6.
+    """
+
+    distribution: TrowbridgeReitzDistribution
+    eta: Array
+    k: Array
+    masking: str = eqx.field(static=True)
+
+    def __init__(self, alpha_x, eta, k, alpha_y=None, *, masking: str = "height_correlated"):
+        self.distribution = TrowbridgeReitzDistribution(alpha_x, alpha_y)
+        eta = _check_eta(_spectral(eta, "eta"))
+        k = _check_k(_spectral(k, "k"))
+        self.eta, self.k = _spectral_pair(eta, k)
+        self.masking = _check_masking(masking)
+
+    def _G(self, wo: Array, wi: Array) -> Array:
+        d = self.distribution
+        return d.G(wo, wi) if self.masking == "height_correlated" else d.G_separable(wo, wi)
+
+    def _bcast_all(self, *items):
+        d = self.distribution
+        return _broadcast(*items, (d.alpha_x, 0), (d.alpha_y, 0), (self.eta, 1), (self.k, 1))
+
+    def _value(self, wo, wi, d, eta, k) -> Array:
+        zo, zi = wo[..., 2], wi[..., 2]
+        hx, hy, hz, nonzero = _normalize3(
+            wo[..., 0] + wi[..., 0], wo[..., 1] + wi[..., 1], zo + zi
+        )
+        wh = jnp.stack([hx, hy, hz], axis=-1)
+        dot = jnp.abs(jnp.sum(wo * wh, axis=-1))
+        F = _fr_conductor(dot[..., None], eta, k)
+        D = d.D(wh)
+        G = self._G(wo, wi)
+        den = 4.0 * jnp.abs(zo) * jnp.abs(zi)
+        ok = (zo * zi > 0) & nonzero
+        v = _safe_div(D * G, den)
+        return jnp.where(ok[..., None], v[..., None] * F, 0.0)
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, ax, ay, eta, k) = self._bcast_all((wo, 1), (wi, 1))
+        return self._value(wo, wi, _distribution(ax, ay), eta, k)
+
+    def _pdf(self, wo, wi, d) -> Array:
+        hx, hy, hz, nonzero = _normalize3(
+            wo[..., 0] + wi[..., 0], wo[..., 1] + wi[..., 1], wo[..., 2] + wi[..., 2]
+        )
+        # Face the half vector forward (+z): sample_wm only produces m_z > 0.
+        sgn = jnp.where(hz < 0, -1.0, 1.0)
+        wh = jnp.stack([hx * sgn, hy * sgn, hz * sgn], axis=-1)
+        dot = jnp.abs(jnp.sum(wo * wh, axis=-1))
+        p = _safe_div(d.D_visible(wo, wh), 4.0 * dot)
+        ok = (wo[..., 2] * wi[..., 2] > 0) & nonzero
+        return jnp.where(ok, p, 0.0)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, ax, ay, _e, _k) = self._bcast_all((wo, 1), (wi, 1))
+        return self._pdf(wo, wi, _distribution(ax, ay))
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, _u, u2, ax, ay, eta, k) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
+        d = _distribution(ax, ay)
+        wm = d.sample_wm(wo, u2)
+        # wi = reflect(wo, wm)   (thesis eq. 3.8)
+        wi = 2.0 * jnp.sum(wo * wm, axis=-1, keepdims=True) * wm - wo
+        ok = (wo[..., 2] * wi[..., 2] > 0)
+        s = BSDFSample(
+            f=self._value(wo, wi, d, eta, k),
+            wi=wi,
+            pdf=self._pdf(wo, wi, d),
+            is_delta=jnp.zeros(ok.shape, bool),
+            is_transmission=jnp.zeros(ok.shape, bool),
+            eta=jnp.ones(ok.shape, wi.dtype),
+            terminate_secondary=jnp.zeros(ok.shape, bool),
+        )
+        return _failed_or(ok, s)
+
+
+# --------------------------------------------------------------------------------------------
+# Rough dielectric (GGX)
+
+
+class RoughDielectricBxDF(AbstractBxDF):
+    r"""Rough dielectric interface: microfacet reflection and transmission (`Walter2007`), GGX.
+
+    With the generalised half vector $\omega_m \propto \eta'\omega_i + \omega_o$ (facing +z),
+    $\eta' = 1$ for reflection and $\eta'$ = relative index seen from `wo` for transmission:
+
+    $$f_r = \frac{D(\omega_m) F G}{4|\cos\theta_o\cos\theta_i|},\qquad
+      f_t = \frac{D(\omega_m)(1 - F) G}{(\omega_i\cdot\omega_m + \omega_o\cdot\omega_m/\eta')^2}
+      \left|\frac{(\omega_i\cdot\omega_m)(\omega_o\cdot\omega_m)}{\cos\theta_i\cos\theta_o}\right|
+      \frac{1}{\eta'^2}$$
+
+    with $F = F_r(\omega_o\cdot\omega_m; \eta)$ (thesis eq. 3.18); the last factor is the
+    radiance factor of eq. 3.15-3.16 (omitted for `mode="importance"`). Microfacets seen from
+    their back are discarded. Sampling: a visible normal (`Heitz2018`), then reflection with
+    probability $F$ or refraction (thesis eq. 3.12) otherwise.
+
+    **Fields:**
+
+    - `alpha_x`, `alpha_y`: GGX roughness in (0, 1], `(...)`. [dimensionless]
+    - `eta`: relative index of refraction inside/outside, > 0, `(..., n_lambda)`. [dimensionless]
+    - `masking`: `"height_correlated"` (default) or `"separable"` (Mitsuba 3).
+
+    !!! note "Thesis"
+        Section 3.1 (glossy reflection and transmission), 3.1.1.
+
+    ??? cite "References"
+        `Walter2007`; `Heitz2018`; `Pharr2023` section 9.7.
+    """
+
+    distribution: TrowbridgeReitzDistribution
+    eta: Array
+    masking: str = eqx.field(static=True)
+
+    def __init__(self, alpha_x, eta, alpha_y=None, *, masking: str = "height_correlated"):
+        self.distribution = TrowbridgeReitzDistribution(alpha_x, alpha_y)
+        self.eta = _check_eta(_spectral(eta, "eta"))
+        self.masking = _check_masking(masking)
+
+    def _G(self, d, wo: Array, wi: Array) -> Array:
+        return d.G(wo, wi) if self.masking == "height_correlated" else d.G_separable(wo, wi)
+
+    def _bcast_all(self, *items):
+        d = self.distribution
+        return _broadcast(*items, (d.alpha_x, 0), (d.alpha_y, 0), (self.eta, 1))
+
+    @staticmethod
+    def _geometry(wo: Array, wi: Array, eta: Array):
+        """Generalised half vector for per-sample `eta` `(...)`; returns
+        (wm, etap, reflect, dot_o, dot_i, valid)."""
+        zo, zi = wo[..., 2], wi[..., 2]
+        reflect = zo * zi > 0
+        etap = jnp.where(reflect, 1.0, jnp.where(zo > 0, eta, 1.0 / eta))
+        mx, my, mz, nonzero = _normalize3(
+            wi[..., 0] * etap + wo[..., 0], wi[..., 1] * etap + wo[..., 1], zi * etap + zo
+        )
+        sgn = jnp.where(mz < 0, -1.0, 1.0)
+        wm = jnp.stack([mx * sgn, my * sgn, mz * sgn], axis=-1)
+        dot_o = jnp.sum(wo * wm, axis=-1)
+        dot_i = jnp.sum(wi * wm, axis=-1)
+        # Discard back-facing microfacets.
+        valid = (zo != 0) & (zi != 0) & nonzero & (dot_i * zi > 0) & (dot_o * zo > 0)
+        return wm, etap, reflect, dot_o, dot_i, valid
+
+    def _value(self, wo, wi, d, eta, mode) -> Array:
+        """Per-wavelength value: geometry is recomputed for every wavelength's eta."""
+        n = eta.shape[-1]
+        wo_l = jnp.broadcast_to(wo[..., None, :], wo.shape[:-1] + (n, 3))
+        wi_l = jnp.broadcast_to(wi[..., None, :], wi.shape[:-1] + (n, 3))
+        d_l = _distribution(d.alpha_x[..., None], d.alpha_y[..., None])
+        wm, etap, reflect, dot_o, dot_i, valid = self._geometry(wo_l, wi_l, eta)
+        F = _fr_dielectric(dot_o, eta)
+        D = d_l.D(wm)
+        G = self._G(d_l, wo_l, wi_l)
+        zo, zi = wo_l[..., 2], wi_l[..., 2]
+        fr = _safe_div(D * G * F, 4.0 * jnp.abs(zo * zi))
+        denom = dot_i + dot_o / etap
+        denom = denom * denom * zi * zo
+        ft = (1.0 - F) * D * G * jnp.abs(_safe_div(dot_i * dot_o, denom))
+        if mode == "radiance":
+            ft = ft / (etap * etap)
+        return jnp.where(valid, jnp.where(reflect, fr, ft), 0.0)
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, ax, ay, eta) = self._bcast_all((wo, 1), (wi, 1))
+        return self._value(wo, wi, _distribution(ax, ay), eta, mode)
+
+    def _pdf(self, wo, wi, d, eta_h) -> Array:
+        wm, etap, reflect, dot_o, dot_i, valid = self._geometry(wo, wi, eta_h)
+        R = _fr_dielectric(dot_o, eta_h)
+        T = 1.0 - R
+        dvis = d.D_visible(wo, wm)
+        pr = _safe_div(dvis, 4.0 * jnp.abs(dot_o)) * R
+        den = dot_i + dot_o / etap
+        pt = dvis * _safe_div(jnp.abs(dot_i), den * den) * T
+        return jnp.where(valid, jnp.where(reflect, pr, pt), 0.0)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, ax, ay, eta) = self._bcast_all((wo, 1), (wi, 1))
+        return self._pdf(wo, wi, _distribution(ax, ay), eta[..., 0])
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, u_lobe, u2, ax, ay, eta) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
+        d = _distribution(ax, ay)
+        eta_h = eta[..., 0]
+        wm = d.sample_wm(wo, u2)
+        dot_o = jnp.sum(wo * wm, axis=-1)
+        R = _fr_dielectric(dot_o, eta_h)
+        reflect = u_lobe < R
+        # Reflection about wm (thesis eq. 3.8).
+        wr = 2.0 * dot_o[..., None] * wm - wo
+        # Refraction through wm (thesis eq. 3.12) with the hero's eta; the interface flips
+        # when wo is on the back of the microfacet.
+        inside = dot_o < 0
+        etap = jnp.where(inside, 1.0 / eta_h, eta_h)
+        c = jnp.abs(dot_o)
+        sin2_t = (1.0 - c * c) / (etap * etap)
+        tir = sin2_t >= 1.0
+        cos_t = _safe_sqrt(jnp.where(tir, 0.0, 1.0 - sin2_t))
+        nm = jnp.where(inside[..., None], -wm, wm)
+        wt = -wo / etap[..., None] + (c / etap - cos_t)[..., None] * nm
+        wi = jnp.where(reflect[..., None], wr, wt)
+        same = wo[..., 2] * wi[..., 2] > 0
+        ok = jnp.where(reflect, same, ~tir & ~same & (wi[..., 2] != 0))
+        f = self._value(wo, wi, d, eta, mode)
+        disp = _dispersive(eta)
+        term = ~reflect & disp
+        f = jnp.where(term[..., None], _hero_only(f), f)
+        pdf = self._pdf(wo, wi, d, eta_h)
+        ok = ok & (pdf > 0)
+        etap_s = jnp.where(wo[..., 2] > 0, eta_h, 1.0 / eta_h)
+        s = BSDFSample(
+            f=f,
+            wi=wi,
+            pdf=pdf,
+            is_delta=jnp.zeros(ok.shape, bool),
+            is_transmission=~reflect,
+            eta=jnp.where(reflect, 1.0, etap_s),
+            terminate_secondary=term,
+        )
+        return _failed_or(ok, s)
+
+
+def _distribution(ax: Array, ay: Array) -> TrowbridgeReitzDistribution:
+    """A distribution from already-validated alphas (no checks: used inside the methods)."""
+    d = TrowbridgeReitzDistribution.__new__(TrowbridgeReitzDistribution)
+    object.__setattr__(d, "alpha_x", ax)
+    object.__setattr__(d, "alpha_y", ay)
+    return d
+
+
+# --------------------------------------------------------------------------------------------
+# Two-sided wrapper
+
+
+def _flip_z(w: Array) -> Array:
+    return w * jnp.asarray([1.0, 1.0, -1.0], w.dtype)
+
+
+class TwoSidedBxDF(AbstractBxDF):
+    r"""Different BxDFs on the two sides of a surface (Mitsuba's `twosided`).
+
+    For `wo` on the front (+z) side the `front` BxDF is used as is. For `wo` on the back side,
+    `wo` and `wi` are mirrored through the surface ($z \to -z$), `back` is evaluated in that
+    mirrored frame (so each BxDF sees its own front side), and a sampled `wi` is mirrored back.
+    Both BxDFs are evaluated and the result selected per element (no branching under `jit`).
+    Meant for reflective BxDFs; a transmissive BxDF would couple the two sides.
+
+    **Fields:**
+
+    - `front`: BxDF of the side the normal points to.
+    - `back`: BxDF of the other side; `None` (default) reuses `front`.
+
+    ??? cite "References"
+        `Jakob2022` (Mitsuba 3 `twosided` plugin).
+    """
+
+    front: AbstractBxDF
+    back: AbstractBxDF | None
+
+    def __init__(self, front: AbstractBxDF, back: AbstractBxDF | None = None):
+        if not isinstance(front, AbstractBxDF) or not (
+            back is None or isinstance(back, AbstractBxDF)
+        ):
+            raise TypeError("`front` and `back` must be BxDFs (subclasses of AbstractBxDF).")
+        self.front = front
+        self.back = back
+
+    def _back(self) -> AbstractBxDF:
+        return self.front if self.back is None else self.back
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        ff = self.front.f(wo, wi, mode=mode)
+        fb = self._back().f(_flip_z(wo), _flip_z(wi), mode=mode)
+        ff, fb = jnp.broadcast_arrays(ff, fb)
+        back = wo[..., 2] < 0
+        back = jnp.reshape(back, back.shape + (1,) * (ff.ndim - back.ndim))
+        return jnp.where(back, fb, ff)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        pf = self.front.pdf(wo, wi)
+        pb = self._back().pdf(_flip_z(wo), _flip_z(wi))
+        pf, pb = jnp.broadcast_arrays(pf, pb)
+        back = jnp.broadcast_to(wo[..., 2] < 0, pf.shape)
+        return jnp.where(back, pb, pf)
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        (wo,) = _dirs(("wo", wo))
+        sf = self.front.sample_f(wo, u_lobe, u2, mode=mode)
+        sb = self._back().sample_f(_flip_z(wo), u_lobe, u2, mode=mode)
+        sb = eqx.tree_at(lambda s: s.wi, sb, _flip_z(sb.wi))
+        back = wo[..., 2] < 0
+
+        def pick(a, b):
+            a, b = jnp.broadcast_arrays(a, b)
+            m = jnp.reshape(back, back.shape + (1,) * (a.ndim - back.ndim))
+            m = jnp.broadcast_to(
+                jnp.reshape(m, (1,) * (a.ndim - m.ndim) + m.shape), a.shape
+            )
+            return jnp.where(m, b, a)
+
+        return jax.tree_util.tree_map(pick, sf, sb)

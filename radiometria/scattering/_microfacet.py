@@ -1,0 +1,198 @@
+r"""The Trowbridge-Reitz (GGX) microfacet distribution, with visible-normal sampling.
+
+All directions are in the local shading frame (normal +z) and point away from the surface.
+The roughness parameters $\alpha_x, \alpha_y$ broadcast against the leading axes of the
+directions (an array `alpha` of shape `(...)` goes with directions `(..., 3)`).
+
+??? cite "References"
+    `Trowbridge1975`; `Walter2007` (GGX); `Heitz2014` (masking-shadowing);
+    `Heitz2018` (visible-normal sampling); `Pharr2023` section 9.6.
+"""
+
+import equinox as eqx
+import jax.numpy as jnp
+from jax import Array
+
+from .._checks import as_float_array
+from ._directions import _align, _safe_sqrt
+
+__all__ = ["TrowbridgeReitzDistribution", "roughness_to_alpha"]
+
+# Smallest alpha used in computations: below it D overflows in float32 (Mitsuba clamps to the
+# same value). Use the smooth BxDFs for mirror-like surfaces.
+ALPHA_MIN = 1e-4
+
+
+def roughness_to_alpha(roughness) -> Array:
+    r"""Map a perceptual roughness in [0, 1] to $\alpha = \sqrt{r}$ (`Pharr2023` section 9.6.1).
+
+    **Arguments:**
+
+    - `roughness`: user-facing roughness, in [0, 1]. [dimensionless]
+
+    **Returns:**
+
+    $\alpha$, in [0, 1]. [dimensionless]
+    """
+    r = as_float_array(roughness, "roughness")
+    r = eqx.error_if(r, (r < 0) | (r > 1), "`roughness` must lie in [0, 1]; got a value outside.")
+    return _safe_sqrt(r)
+
+
+def _check_alpha(alpha, name: str) -> Array:
+    alpha = as_float_array(alpha, name)
+    return eqx.error_if(
+        alpha,
+        (alpha <= 0) | (alpha > 1),
+        f"`{name}` (GGX roughness alpha) must lie in (0, 1]; got a value outside. "
+        "Use the smooth BxDF for alpha = 0.",
+    )
+
+
+class TrowbridgeReitzDistribution(eqx.Module):
+    r"""Anisotropic Trowbridge-Reitz (GGX) distribution of microfacet normals.
+
+    $$D(\omega_m) = \frac{1}{\pi\alpha_x\alpha_y\left(\frac{m_x^2}{\alpha_x^2} +
+      \frac{m_y^2}{\alpha_y^2} + m_z^2\right)^2}$$
+
+    normalised so that $\int D(\omega_m)\cos\theta_m\,d\omega_m = 1$ over the upper hemisphere.
+
+    **Fields:**
+
+    - `alpha_x`, `alpha_y`: roughness along the tangent axes, in (0, 1] (values below 1e-4
+        are raised to 1e-4, as in Mitsuba). Shape `(...)`, broadcast against directions. [dimensionless]
+
+    !!! note "Thesis"
+        Glossy reflection, section 3.1 (the thesis names the lobe types; the microfacet model
+        fills them in following `Pharr2023` section 9.6).
+    """
+
+    alpha_x: Array
+    alpha_y: Array
+
+    def __init__(self, alpha_x, alpha_y=None):
+        ax = _check_alpha(alpha_x, "alpha_x")
+        ay = ax if alpha_y is None else _check_alpha(alpha_y, "alpha_y")
+        self.alpha_x = jnp.maximum(ax, ALPHA_MIN)
+        self.alpha_y = jnp.maximum(ay, ALPHA_MIN)
+
+    def _axy(self, w: Array) -> tuple[Array, Array, Array, Array, Array]:
+        x, y, z, ax, ay = _align(w[..., 0], w[..., 1], w[..., 2], self.alpha_x, self.alpha_y)
+        return x, y, z, ax, ay
+
+    def D(self, wm) -> Array:
+        """Microfacet normal density $D(\\omega_m)$ (symmetric in $\\pm z$). [sr^-1]"""
+        x, y, z, ax, ay = self._axy(wm)
+        e = (x / ax) ** 2 + (y / ay) ** 2 + z * z
+        return 1.0 / (jnp.pi * ax * ay * e * e)
+
+    def _sq_slope_term(self, w: Array) -> tuple[Array, Array]:
+        """Returns (|z|, sqrt(z^2 + alpha_x^2 x^2 + alpha_y^2 y^2))."""
+        x, y, z, ax, ay = self._axy(w)
+        az = jnp.abs(z)
+        return az, jnp.sqrt(z * z + (ax * x) ** 2 + (ay * y) ** 2)
+
+    def lambda_(self, w) -> Array:
+        r"""Smith's auxiliary function $\Lambda(\omega) = (\sqrt{1 + \alpha^2\tan^2\theta} - 1)/2$; inf at grazing."""
+        az, r = self._sq_slope_term(w)
+        ok = az > 0
+        return jnp.where(ok, 0.5 * (r / jnp.where(ok, az, 1.0) - 1.0), jnp.inf)
+
+    def G1(self, w) -> Array:
+        r"""Smith masking function $G_1(\omega) = 1/(1 + \Lambda(\omega))$, in [0, 1]; 0 at grazing.
+
+        Evaluated as $2|\cos\theta|/(|\cos\theta| + \sqrt{\cos^2\theta + \alpha_x^2\omega_x^2 +
+        \alpha_y^2\omega_y^2})$, finite everywhere.
+        """
+        az, r = self._sq_slope_term(w)
+        den = az + r
+        ok = den > 0
+        return jnp.where(ok, 2.0 * az / jnp.where(ok, den, 1.0), 0.0)
+
+    def G(self, wo, wi) -> Array:
+        r"""Height-correlated masking-shadowing $G = 1/(1 + \Lambda(\omega_o) + \Lambda(\omega_i))$ (`Heitz2014`).
+
+        Evaluated as $2|z_o||z_i|/(|z_i|\,r_o + |z_o|\,r_i)$ with
+        $r = \sqrt{z^2 + \alpha_x^2 x^2 + \alpha_y^2 y^2}$, finite everywhere (0 at grazing).
+        """
+        zo, ro = self._sq_slope_term(wo)
+        zi, ri = self._sq_slope_term(wi)
+        zo, ro, zi, ri = _align(zo, ro, zi, ri)
+        den = zi * ro + zo * ri
+        ok = den > 0
+        return jnp.where(ok, 2.0 * zo * zi / jnp.where(ok, den, 1.0), 0.0)
+
+    def G_separable(self, wo, wi) -> Array:
+        """Separable (uncorrelated) Smith masking-shadowing $G_1(\\omega_o)G_1(\\omega_i)$, as in Mitsuba 3."""
+        a, b = _align(self.G1(wo), self.G1(wi))
+        return a * b
+
+    def D_visible(self, w, wm) -> Array:
+        r"""Distribution of visible normals $D_\omega(\omega_m) = \frac{G_1(\omega)}{|\cos\theta|}
+        D(\omega_m)\,|\omega\cdot\omega_m|$ (`Heitz2018`). [sr^-1]"""
+        w = as_float_array(w, "w")
+        wm = as_float_array(wm, "wm")
+        w, wm = _align(w, wm)
+        g1, d, az, dot = _align(
+            self.G1(w), self.D(wm), jnp.abs(w[..., 2]), jnp.abs(jnp.sum(w * wm, axis=-1))
+        )
+        ok = az > 0
+        return jnp.where(ok, g1 / jnp.where(ok, az, 1.0) * d * dot, 0.0)
+
+    def pdf(self, w, wm) -> Array:
+        """Density of `sample_wm(w, u)` with respect to solid angle of $\\omega_m$: `D_visible`. [sr^-1]"""
+        return self.D_visible(w, wm)
+
+    def sample_wm(self, w, u) -> Array:
+        r"""Sample a visible microfacet normal for the direction `w` (`Heitz2018`, `Pharr2023` 9.6.4).
+
+        The hemisphere configuration: stretch `w` to the unit-roughness configuration, sample
+        the projected area of the visible hemisphere (a disk with its lower half squashed by
+        $(1 + \cos\theta)/2$), lift to the hemisphere and unstretch.
+
+        **Arguments:**
+
+        - `w`: direction `(..., 3)` in the local frame; either hemisphere (it is mirrored to +z).
+        - `u`: uniform variates `(..., 2)` in [0, 1).
+
+        **Returns:**
+
+        Microfacet normals `(..., 3)` with $m_z > 0$, distributed with density `pdf(w, wm)`.
+        """
+        w = as_float_array(w, "w")
+        u = as_float_array(u, "u")
+        x, y, z, ax, ay = self._axy(w)
+        u0, u1 = u[..., 0], u[..., 1]
+        x, y, z, ax, ay, u0, u1 = jnp.broadcast_arrays(*_align(x, y, z, ax, ay, u0, u1))
+        # Transform w to the hemispherical configuration (alpha = 1).
+        hx, hy, hz = ax * x, ay * y, z
+        inv = 1.0 / jnp.sqrt(hx * hx + hy * hy + hz * hz)
+        hx, hy, hz = hx * inv, hy * inv, hz * inv
+        flip = hz < 0
+        hx, hy, hz = jnp.where(flip, -hx, hx), jnp.where(flip, -hy, hy), jnp.abs(hz)
+        # Orthonormal basis (T1, T2, wh); T1 = normalize(z x wh) away from the pole.
+        rho2 = hx * hx + hy * hy
+        pole = rho2 < 1e-14
+        inv_rho = 1.0 / jnp.sqrt(jnp.where(pole, 1.0, rho2))
+        t1x = jnp.where(pole, 1.0, -hy * inv_rho)
+        t1y = jnp.where(pole, 0.0, hx * inv_rho)
+        # T2 = wh x T1 (T1 has no z component)
+        t2x = -hz * t1y
+        t2y = hz * t1x
+        t2z = hx * t1y - hy * t1x
+        # Uniformly distributed point on the unit disk (polar mapping, as pbrt).
+        r = jnp.sqrt(u0)
+        phi = 2.0 * jnp.pi * u1
+        px, py = r * jnp.cos(phi), r * jnp.sin(phi)
+        # Warp the disk to the projection of the visible hemisphere.
+        h = _safe_sqrt(1.0 - px * px)
+        s = 0.5 * (1.0 + hz)
+        py = (1.0 - s) * h + s * py
+        pz = _safe_sqrt(1.0 - px * px - py * py)
+        nx = px * t1x + py * t2x + pz * hx
+        ny = px * t1y + py * t2y + pz * hy
+        nz = py * t2z + pz * hz
+        # Back to the ellipsoid configuration.
+        mx, my, mz = ax * nx, ay * ny, jnp.maximum(1e-6, nz)
+        inv = 1.0 / jnp.sqrt(mx * mx + my * my + mz * mz)
+        return jnp.stack([mx * inv, my * inv, mz * inv], axis=-1)

@@ -1,0 +1,491 @@
+r"""The RGB -> coefficient table (thesis section 2.2.3, after eq. 2.27): layout, fit, lookup.
+
+**Layout (pbrt-v4 `RGBToSpectrumTable`, rgb2spec).** `coeffs[l, k, j, i, :]` holds the nm
+coefficients of the colour whose largest component is channel `l` with value `scale[k]`, and
+whose next two components (cyclically, channels `(l+1) % 3` and `(l+2) % 3`) are
+`i / (res - 1)` and `j / (res - 1)` times `scale[k]`. The brightness axis is nonlinear,
+`scale[k] = smoothstep(smoothstep(k / (res - 1)))` with `smoothstep(t) = t^2 (3 - 2t)`, which
+puts nodes densely near black and white.
+
+**Lookup (pbrt semantics).** Greys (r = g = b) take the closed form
+$c = (0, 0, (v - \tfrac12)/\sqrt{v(1-v)})$, exact (black -> 0, white -> 1). Otherwise: the
+largest component `l` (ties broken as pbrt), `z = rgb[l]`, `x, y` the next two components
+divided by `z` on the `(res - 1)` grid, the brightness interval found by search in `scale`, and
+trilinear interpolation of the coefficients.
+
+**Fit.** Each column (l, j, i) of the table is a curve along brightness. As in pbrt's
+`rgb2spec_opt`, the column is solved first at `k0 = res // 5` from c = 0, then warm-started
+upwards to k = res - 1 and downwards to k = 1 (`lax.scan`), every column at once (`vmap`-style
+batching over the flattened (3 res res) axis, optionally sharded over devices). Each step runs
+a fixed number of damped Gauss-Newton iterations (`_fit.lm_iterate`); entries that miss the
+tolerance are then refitted with many more iterations from their converged neighbours (the
+"repair" pass), and each entry's final residual and `optimistix.RESULTS` code are reported.
+
+**Explicit ends.** The black row (k = 0, z = 0) has no finite solution (S = 0 needs
+$c_2 = -\infty$); it stores the coefficients of row k = 1 (z = 1.7e-6 at res 64), so lookups
+below that brightness reproduce a colour darker than L* = 0.002. The grey column (i = j =
+res - 1) is set to the closed form, and its top node, white, to the finite
+`WHITE_C2 = 2048` (s(2048) = 1 - 6e-8, i.e. 1 in float32; Mitsuba's new rgb2spec uses 8192 the
+same way): lookups of white itself take the exact grey path.
+"""
+
+import dataclasses
+import time
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optimistix as optx
+from jax import lax
+from jaxtyping import Array, ArrayLike, Float, Int
+
+from .._checks import as_float_array, check_last_axis, check_positive_int
+from ._fit import (
+    DEFAULT_TOLERANCE,
+    LMState,
+    ModelArrays,
+    _check_rgb_values,
+    grey_coefficients,
+    lm_init,
+    lm_iterate,
+    target_Lab,
+)
+from ._forward import forward_model
+from ._sigmoid_polynomial import common_float_dtype, normalised_to_nm_coefficients
+
+WHITE_C2 = 2048.0  # c2 of the white node (module docstring)
+
+
+def brightness_scale(resolution: int, dtype=np.float64) -> np.ndarray:
+    """pbrt's brightness nodes `smoothstep(smoothstep(k / (res - 1)))`, k = 0 .. res - 1. [-]"""
+    t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
+    ss = lambda u: u * u * (3.0 - 2.0 * u)  # noqa: E731
+    return ss(ss(t)).astype(dtype)
+
+
+class RGBToSpectrumLUT(eqx.Module):
+    r"""Table of sigmoid-polynomial coefficients for the RGB colours of one colour space.
+
+    A pytree (equinox Module), so it can be passed through `jit` and `vmap` and its arrays
+    differentiated. Build one with `fit_lut`, read one with `load_lut`, or take the packaged
+    sRGB table from `get_lut()`.
+
+    **Fields:**
+
+    - `resolution`: table size per axis (static).
+    - `colourspace`: name of the RGB colour space (static).
+    - `scale` (res,): brightness nodes, increasing from 0 to 1. [-]
+    - `coeffs` (3, res, res, res, 3): nm coefficients in pbrt's layout (module docstring).
+        [nm^-2, nm^-1, -]
+
+    `lut.coefficients(rgb)` maps linear RGB (..., 3) in [0, 1] to nm coefficients (..., 3).
+
+    !!! note "Thesis"
+        Section 2.2.3, the lookup table after eq. 2.27.
+
+    ??? cite "References"
+        `Jakob2019` section 5; `Pharr2023` section 4.6.6 (`RGBToSpectrumTable`).
+    """
+
+    resolution: int = eqx.field(static=True)
+    colourspace: str = eqx.field(static=True)
+    scale: Float[Array, " res"]
+    coeffs: Float[Array, "3 res res res 3"]
+
+    def __init__(self, scale: ArrayLike, coeffs: ArrayLike, colourspace: str = "sRGB"):
+        scale = as_float_array(scale, "scale")
+        coeffs = as_float_array(coeffs, "coeffs")
+        if scale.ndim != 1 or scale.shape[0] < 2:
+            raise ValueError(f"`scale` must have shape (res,) with res >= 2, got {scale.shape}.")
+        res = scale.shape[0]
+        if coeffs.shape != (3, res, res, res, 3):
+            raise ValueError(
+                f"`coeffs` must have shape (3, res, res, res, 3) = {(3, res, res, res, 3)} for "
+                f"res = {res}, got {coeffs.shape}."
+            )
+        self.resolution = int(res)
+        self.colourspace = str(colourspace)
+        self.scale = scale
+        self.coeffs = coeffs
+
+    def coefficients(self, rgb: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+        r"""nm coefficients for linear RGB in [0, 1] (pbrt's lookup, module docstring).
+
+        Differentiable in `rgb` (piecewise linear, finite gradients also at black and on the
+        grey axis) and in the table. Components outside [0, 1] or non-finite raise
+        (`eqx.error_if` under `jit`).
+
+        **Arguments:**
+
+        - `rgb`: linear RGB of this table's colour space, (..., 3), components in [0, 1]. [-]
+
+        **Returns:**
+
+        (..., 3) coefficients $(c_0, c_1, c_2)$ for $\lambda$ in nm. [nm^-2, nm^-1, -]
+        """
+        rgb = check_last_axis(as_float_array(rgb, "rgb"), "rgb", 3)
+        rgb = _check_rgb_values(rgb)
+        return lookup(self, rgb)
+
+
+def _argmax_pbrt(rgb: Array) -> Array:
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return jnp.where(r > g, jnp.where(r > b, 0, 2), jnp.where(g > b, 1, 2))
+
+
+def lookup(lut: RGBToSpectrumLUT, rgb: Array) -> Array:
+    """pbrt's table lookup without argument checks (see `RGBToSpectrumLUT.coefficients`)."""
+    dtype = common_float_dtype(rgb, lut.coeffs)
+    rgb = rgb.astype(dtype)
+    coeffs = lut.coeffs.astype(dtype)
+    scale = lut.scale.astype(dtype)
+    res = lut.resolution
+    batch = rgb.shape[:-1]
+    flat = rgb.reshape(-1, 3)
+
+    l = _argmax_pbrt(flat)  # noqa: E741
+    z = jnp.take_along_axis(flat, l[:, None], axis=1)[:, 0]
+    c1 = jnp.take_along_axis(flat, ((l + 1) % 3)[:, None], axis=1)[:, 0]
+    c2 = jnp.take_along_axis(flat, ((l + 2) % 3)[:, None], axis=1)[:, 0]
+    positive = z > 0
+    z_safe = jnp.where(positive, z, 1.0)
+    x = jnp.where(positive, c1 * (res - 1) / z_safe, 0.0)
+    y = jnp.where(positive, c2 * (res - 1) / z_safe, 0.0)
+    xi = jnp.clip(jnp.floor(x).astype(jnp.int32), 0, res - 2)
+    yi = jnp.clip(jnp.floor(y).astype(jnp.int32), 0, res - 2)
+    zi = jnp.clip(jnp.searchsorted(scale, z, side="left").astype(jnp.int32) - 1, 0, res - 2)
+    dx = x - xi.astype(dtype)
+    dy = y - yi.astype(dtype)
+    z0 = scale[zi]
+    z1 = scale[zi + 1]
+    dz = (z - z0) / (z1 - z0)
+
+    def co(ox, oy, oz):
+        return coeffs[l, zi + oz, yi + oy, xi + ox]  # (n, 3)
+
+    lerp = lambda t, a, b: a + t[:, None] * (b - a)  # noqa: E731
+    c = lerp(
+        dz,
+        lerp(dy, lerp(dx, co(0, 0, 0), co(1, 0, 0)), lerp(dx, co(0, 1, 0), co(1, 1, 0))),
+        lerp(dy, lerp(dx, co(0, 0, 1), co(1, 0, 1)), lerp(dx, co(0, 1, 1), co(1, 1, 1))),
+    )
+    grey = (flat[:, 0] == flat[:, 1]) & (flat[:, 1] == flat[:, 2])
+    # Closed form for greys, with safe arguments so gradients stay finite at black and white.
+    v = jnp.where(grey, flat[:, 0], 0.5)
+    c_grey = grey_coefficients(v)
+    c = jnp.where(grey[:, None], c_grey, c)
+    return c.reshape(batch + (3,))
+
+
+# --- Fitting the table --------------------------------------------------------------------
+
+
+class LUTFitResult(eqx.Module):
+    """What `fit_lut` returns: the table and a per-entry account of the fit.
+
+    - `lut`: the `RGBToSpectrumLUT`.
+    - `residual` (3, res, res, res): $\\Delta E^*_{ab}$ of each table entry against its own
+        target colour (0 for the closed-form entries). [-]
+    - `result`: `optimistix.RESULTS` per entry (`successful` where residual <= tolerance).
+    - `exact` (3, res, res, res) bool: entries set in closed form (greys, white, black row).
+    - `tolerance`: the convergence tolerance (static). [Delta E*ab]
+    - `num_repaired`: entries that needed the repair pass (static).
+    - `seconds`: wall time of the fit, compilation included (static). [s]
+    - `settings`: the fit settings, JSON-able (static).
+    """
+
+    lut: RGBToSpectrumLUT
+    residual: Float[Array, "3 res res res"]
+    result: optx.RESULTS
+    exact: Array
+    tolerance: float = eqx.field(static=True)
+    num_repaired: int = eqx.field(static=True)
+    seconds: float = eqx.field(static=True)
+    settings: dict = eqx.field(static=True)
+
+    @property
+    def converged(self) -> Array:
+        """Boolean (3, res, res, res): the entry reached the tolerance (or is exact)."""
+        return self.result._value == optx.RESULTS.successful._value
+
+    def summary(self) -> dict:
+        """Residual distribution of the table points and convergence counts (plain floats)."""
+        r = np.asarray(self.residual).ravel()
+        fitted = ~np.asarray(self.exact).ravel()
+        rf = r[fitted]
+        q = np.quantile(rf, [0.5, 0.9, 0.99, 0.999, 1.0]) if rf.size else np.zeros(5)
+        return {
+            "entries": int(r.size),
+            "fitted": int(fitted.sum()),
+            "closed_form": int((~fitted).sum()),
+            "converged": int(np.asarray(self.converged).sum()),
+            "not_converged": int((~np.asarray(self.converged)).sum()),
+            "repaired": self.num_repaired,
+            "residual_median": float(q[0]),
+            "residual_p90": float(q[1]),
+            "residual_p99": float(q[2]),
+            "residual_p999": float(q[3]),
+            "residual_max": float(q[4]),
+            "tolerance": self.tolerance,
+            "seconds": self.seconds,
+        }
+
+
+def _column_directions(resolution: int, dtype) -> np.ndarray:
+    """Unit-brightness RGB of every column (3 res res, 3): e[l] = 1, e[l+1] = x, e[l+2] = y."""
+    t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
+    l, j, i = np.meshgrid(np.arange(3), np.arange(resolution), np.arange(resolution), indexing="ij")
+    e = np.zeros((3, resolution, resolution, 3))
+    for ll in range(3):
+        e[ll, :, :, ll] = 1.0
+        e[ll, :, :, (ll + 1) % 3] = t[i[ll]]
+        e[ll, :, :, (ll + 2) % 3] = t[j[ll]]
+    return e.reshape(-1, 3).astype(dtype)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Schedule:
+    n_first: int  # LM steps for the cold start at k0
+    n_steps: int  # LM steps per brightness step
+    chunk: int
+
+
+def _sweep(c_start, e, scale_ks, m, n_steps, chunk):
+    """Warm-started LM along the brightness nodes `scale_ks` (a `lax.scan`), every column."""
+
+    def step(carry, z):
+        c, c_prev, z_prev, z_prevprev = carry
+        # Linear extrapolation of the coefficient curve in brightness (secant predictor).
+        ratio = (z - z_prev) / jnp.where(z_prev == z_prevprev, 1.0, z_prev - z_prevprev)
+        ratio = jnp.where(z_prev == z_prevprev, 0.0, jnp.clip(ratio, -2.0, 2.0))
+        guess = c + ratio * (c - c_prev)
+        lab_t = target_Lab(e * z, m)
+        s = lm_iterate(lm_init(guess, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk)
+        return (s.c, c, z, z_prev), (s.c, jnp.sqrt(s.cost))
+
+    z0 = scale_ks[0]
+    init = (c_start, c_start, z0, z0)
+    _, (cs, rs) = lax.scan(step, init, scale_ks[1:])
+    return cs, rs
+
+
+def _fit_columns(e, scale, k0, m, schedule: _Schedule):
+    """Coefficients (res, n, 3) and residuals (res, n) for the columns with directions e (n, 3)."""
+    n = e.shape[0]
+    dtype = e.dtype
+    lab0 = target_Lab(e * scale[k0], m)
+    s = lm_init(jnp.zeros((n, 3), dtype), lab0, m, chunk=schedule.chunk)
+    s = lm_iterate(s, lab0, m, schedule.n_first, chunk=schedule.chunk)
+    c0, r0 = s.c, jnp.sqrt(s.cost)
+    up_c, up_r = _sweep(c0, e, scale[k0:], m, schedule.n_steps, schedule.chunk)
+    dn_c, dn_r = _sweep(c0, e, scale[1 : k0 + 1][::-1], m, schedule.n_steps, schedule.chunk)
+    coeffs = jnp.concatenate([dn_c[::-1], c0[None], up_c], axis=0)
+    resid = jnp.concatenate([dn_r[::-1], r0[None], up_r], axis=0)
+    # Row 0 (black) is not fitted: placeholder copies of row 1 (set explicitly later).
+    coeffs = jnp.concatenate([coeffs[:1], coeffs], axis=0)
+    resid = jnp.concatenate([jnp.zeros_like(resid[:1]), resid], axis=0)
+    return coeffs, resid
+
+
+def _make_fit_fn(m: ModelArrays, scale, k0, schedule, mesh=None):
+    def fn(e):
+        return _fit_columns(e, scale, k0, m, schedule)
+
+    if mesh is None:
+        return jax.jit(fn)
+    from jax.sharding import PartitionSpec as P
+
+    sharded = jax.shard_map(fn, mesh=mesh, in_specs=P("columns"), out_specs=(P(None, "columns"), P(None, "columns")))
+    return jax.jit(sharded)
+
+
+def _repair(coeffs, resid, e, scale, m, tol, exact, n_steps, rounds, chunk):
+    """Refit entries above `tol` from their neighbours along brightness (host-driven rounds)."""
+    res = scale.shape[0]
+    n_repaired = 0
+    lm = jax.jit(
+        lambda c, lab_t: lm_iterate(lm_init(c, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk),
+    )
+    for _ in range(rounds):
+        bad = (resid > tol) & ~exact
+        bad[0] = False
+        ks, cols = np.nonzero(bad)
+        if ks.size == 0:
+            break
+        n_repaired += ks.size
+        # Bucket the batch size to limit recompilations.
+        size = 1 << int(np.ceil(np.log2(max(ks.size, 64))))
+        targets = np.asarray(e)[cols] * np.asarray(scale)[ks][:, None]
+        best_c = coeffs[ks, cols].copy()
+        best_r = resid[ks, cols].copy()
+        starts = [coeffs[np.clip(ks + d, 1, res - 1), cols] for d in (-1, 1, -2, 2)]
+        starts.append(np.zeros_like(best_c))
+        starts.append(best_c)
+        for c_start in starts:
+            pad = size - ks.size
+            cp = np.concatenate([c_start, np.zeros((pad, 3), c_start.dtype)])
+            tp = np.concatenate([targets, np.full((pad, 3), 0.5, targets.dtype)])
+            lab_t = target_Lab(jnp.asarray(tp, coeffs.dtype), m)
+            st: LMState = lm(jnp.asarray(cp, coeffs.dtype), lab_t)
+            c_new = np.asarray(st.c)[: ks.size]
+            r_new = np.sqrt(np.asarray(st.cost))[: ks.size]
+            better = r_new < best_r
+            best_c[better] = c_new[better]
+            best_r[better] = r_new[better]
+            if np.all(best_r <= tol):
+                break
+        coeffs[ks, cols] = best_c
+        resid[ks, cols] = best_r
+    return coeffs, resid, n_repaired
+
+
+def fit_lut(
+    colourspace="sRGB",
+    resolution: int = 64,
+    *,
+    dtype=jnp.float32,
+    tolerance: float = DEFAULT_TOLERANCE,
+    n_first: int = 40,
+    n_steps: int = 6,
+    repair_steps: int = 60,
+    repair_rounds: int = 3,
+    chunk: int = 512,
+    step_nm: float = 1.0,
+    devices=None,
+    progress=None,
+    throw: bool = True,
+) -> LUTFitResult:
+    r"""Fit the coefficient table of an RGB colour space (thesis eq. 2.27, section 2.2.3).
+
+    See the module docstring for the layout, the sweep along brightness and the explicit
+    black / grey / white entries. The work is vectorised over the 3 res^2 columns of the table
+    and, with `devices`, sharded over them (`jax.shard_map` over the flattened column axis;
+    e.g. `devices=jax.devices()` after `XLA_FLAGS=--xla_force_host_platform_device_count=2` uses
+    both cores of a 2-core CPU as two devices).
+
+    **Arguments:**
+
+    - `colourspace`: a space of `colorimetry.RGB_COLOURSPACES` (name or alias).
+    - `resolution`: table size per axis, >= 2 (pbrt and Mitsuba use 64).
+    - `dtype`: working and storage dtype (float32 default; float64 for reference fits).
+    - `tolerance`: per-entry convergence criterion on $\Delta E^*_{ab}$. [-]
+    - `n_first`, `n_steps`: Gauss-Newton iterations for the cold start and per brightness
+        step; `repair_steps`, `repair_rounds`: the repair pass.
+    - `chunk`: colours per vectorised block (cache blocking).
+    - `step_nm`: quadrature step of the forward model (1 nm default). [nm]
+    - `devices`: sequence of devices to shard the columns over (None: default device).
+    - `progress`: optional callable `progress(stage: str, done: int, total: int)`.
+    - `throw`: raise `RuntimeError` if an entry misses the tolerance after the repair pass.
+
+    **Returns:**
+
+    A `LUTFitResult` (table, per-entry residual and `optimistix.RESULTS`, timings).
+
+    !!! note "Thesis"
+        Eq. 2.25-2.27 and the lookup table of section 2.2.3; Gauss-Newton, appendix C.1.
+
+    ??? cite "References"
+        `Jakob2019` section 5; `Pharr2023` section 4.6.6 (`rgb2spec_opt`).
+    """
+    t_start = time.perf_counter()
+    res = check_positive_int(resolution, "resolution", minimum=2)
+    model = forward_model(colourspace, step_nm=step_nm)
+    dtype = jnp.dtype(dtype)
+    if dtype not in (jnp.dtype(jnp.float32), jnp.dtype(jnp.float64)):
+        raise TypeError(f"`dtype` must be float32 or float64, got {dtype}.")
+    if dtype == jnp.dtype(jnp.float64) and not jax.config.jax_enable_x64:
+        raise ValueError("`dtype=float64` needs `jax.config.update('jax_enable_x64', True)`.")
+    m = ModelArrays.build(model, dtype)
+    scale_np = brightness_scale(res)
+    scale = jnp.asarray(scale_np, dtype)
+    k0 = max(1, res // 5)
+    schedule = _Schedule(n_first=n_first, n_steps=n_steps, chunk=chunk)
+    e_np = _column_directions(res, np.float64)
+    n_cols = e_np.shape[0]
+
+    mesh = None
+    n_dev = 1
+    if devices is not None and len(devices) > 1:
+        from jax.sharding import Mesh
+
+        mesh = Mesh(np.asarray(devices), ("columns",))
+        n_dev = len(devices)
+    pad = (-n_cols) % (n_dev * min(chunk, max(1, n_cols // n_dev)))
+    e_pad = np.concatenate([e_np, np.tile(e_np[:1], (pad, 1))]) if pad else e_np
+    e = jnp.asarray(e_pad, dtype)
+    if mesh is not None:
+        from jax.sharding import NamedSharding, PartitionSpec as P
+
+        e = jax.device_put(e, NamedSharding(mesh, P("columns")))
+    fit_fn = _make_fit_fn(m, scale, k0, schedule, mesh)
+    if progress is not None:
+        progress("sweep", 0, 1)
+    coeffs, resid = fit_fn(e)
+    coeffs = np.array(coeffs)[:, :n_cols]  # (res, n_cols, 3), normalised
+    resid = np.array(resid)[:, :n_cols]
+    if progress is not None:
+        progress("sweep", 1, 1)
+
+    # Explicit entries: greys (closed form), white (finite), black row (copy of row 1).
+    exact = np.zeros((res, n_cols), dtype=bool)
+    grey_cols = np.flatnonzero((e_np[:, 0] == 1) & (e_np[:, 1] == 1) & (e_np[:, 2] == 1))
+    with jax.enable_x64(dtype == jnp.dtype(jnp.float64)):
+        g = np.array(grey_coefficients(jnp.asarray(scale_np, dtype)))
+    g[-1, 2] = WHITE_C2
+    for col in grey_cols:
+        coeffs[:, col] = g
+        resid[:, col] = 0.0
+        exact[:, col] = True
+    coeffs, resid, n_repaired = _repair(
+        coeffs, resid, e_np.astype(dtype), scale_np.astype(dtype), m, tolerance, exact,
+        repair_steps, repair_rounds, chunk,
+    )  # fmt: skip
+    if progress is not None:
+        progress("repair", 1, 1)
+    coeffs[0] = coeffs[1]
+    resid[0] = 0.0
+    exact[0] = True
+
+    coeffs_nm = np.array(normalised_to_nm_coefficients(jnp.asarray(coeffs)), dtype=dtype)
+    # (res_k, 3 * res_j * res_i, 3) -> (3, res_k, res_j, res_i, 3)
+    table = coeffs_nm.reshape(res, 3, res, res, 3).transpose(1, 0, 2, 3, 4)
+    resid_t = resid.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
+    exact_t = exact.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
+    ok = (resid_t <= tolerance) | exact_t
+    result = optx.RESULTS.where(
+        jnp.asarray(ok), optx.RESULTS.successful, optx.RESULTS.nonlinear_max_steps_reached
+    )
+    lut = RGBToSpectrumLUT(jnp.asarray(scale_np, dtype), jnp.asarray(table), model.colourspace)
+    settings = {
+        **model.description(),
+        "resolution": res,
+        "dtype": str(dtype),
+        "tolerance_delta_E_ab": tolerance,
+        "solver": "damped Gauss-Newton (Levenberg-Marquardt), exact JAX Jacobian",
+        "n_first": n_first,
+        "n_steps": n_steps,
+        "repair_steps": repair_steps,
+        "repair_rounds": repair_rounds,
+        "start_index": k0,
+        "white_c2": WHITE_C2,
+    }
+    out = LUTFitResult(
+        lut=lut,
+        residual=jnp.asarray(resid_t),
+        result=result,
+        exact=jnp.asarray(exact_t),
+        tolerance=float(tolerance),
+        num_repaired=int(n_repaired),
+        seconds=time.perf_counter() - t_start,
+        settings=settings,
+    )
+    if throw and not ok.all():
+        n_bad = int((~ok).sum())
+        worst = np.unravel_index(np.argmax(np.where(ok, -np.inf, resid_t)), resid_t.shape)
+        raise RuntimeError(
+            f"fit_lut({model.colourspace!r}, {res}): {n_bad} entries did not reach Delta E*ab <= "
+            f"{tolerance}; worst at index {tuple(int(w) for w in worst)} with residual "
+            f"{float(resid_t[worst]):.3g}. Pass throw=False to inspect `result` and `residual`."
+        )
+    return out
