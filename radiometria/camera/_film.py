@@ -327,8 +327,9 @@ def splat_samples(
     px = first[:, None, None, 0] + steps[None, None, :]  # (n, 1, k)
     py = first[:, None, None, 1] + steps[None, :, None]  # (n, k, 1)
     px, py = jnp.broadcast_arrays(px, py)  # (n, k, k)
-    offset = jnp.stack([px + 0.5 - xy[:, None, None, 0], py + 0.5 - xy[:, None, None, 1]], axis=-1)
-    f = filter.evaluate(offset.astype(dtype)) * w[:, None, None]  # (n, k, k)
+    cx = px.astype(dtype) + 0.5 - xy[:, None, None, 0]  # pixel centre minus sample position
+    cy = py.astype(dtype) + 0.5 - xy[:, None, None, 1]
+    f = filter.evaluate(jnp.stack([cx, cy], axis=-1)) * w[:, None, None]  # (n, k, k)
     ij = jnp.stack([px, py], axis=-1)
     idx = _flat_pixel_index(film, ij, f.shape).reshape(-1)
     n_pix = film.width * film.height

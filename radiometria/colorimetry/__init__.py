@@ -59,17 +59,25 @@ from ._rgb import (
     normalised_primary_matrix as normalised_primary_matrix,
     romm_decoding as romm_decoding,
     romm_encoding as romm_encoding,
-    sRGB_to_XYZ as sRGB_to_XYZ,
     srgb_eotf as srgb_eotf,
     srgb_eotf_inverse as srgb_eotf_inverse,
+    sRGB_to_XYZ as sRGB_to_XYZ,
+)
+from ._temperature import (
+    CCT_to_uv as CCT_to_uv,
+    CCT_to_xy as CCT_to_xy,
+    planckian_locus_uv as planckian_locus_uv,
+    planckian_table as planckian_table,
+    uv_to_CCT as uv_to_CCT,
+    xy_to_CCT as xy_to_CCT,
 )
 from ._tristimulus import (
-    sd_to_XYZ as sd_to_XYZ,
-    tristimulus_weights as tristimulus_weights,
     XYZ_to_xy as XYZ_to_xy,
     XYZ_to_xyY as XYZ_to_xyY,
-    xy_to_XYZ as xy_to_XYZ,
+    sd_to_XYZ as sd_to_XYZ,
+    tristimulus_weights as tristimulus_weights,
     xy_to_xyY as xy_to_xyY,
+    xy_to_XYZ as xy_to_XYZ,
     xyY_to_xy as xyY_to_xy,
     xyY_to_XYZ as xyY_to_XYZ,
 )

@@ -44,7 +44,9 @@ def _cat_matrix(method: str) -> np.ndarray:
 
 
 def matrix_chromatic_adaptation(
-    XYZ_w: Float[ArrayLike, "*#batch 3"], XYZ_wr: Float[ArrayLike, "*#batch 3"], method: str = "CAT02"
+    XYZ_w: Float[ArrayLike, "*#batch 3"],
+    XYZ_wr: Float[ArrayLike, "*#batch 3"],
+    method: str = "CAT02",
 ) -> Float[Array, "... 3 3"]:
     """The (..., 3, 3) von Kries adaptation matrix from white `XYZ_w` to white `XYZ_wr`.
 
@@ -54,7 +56,9 @@ def matrix_chromatic_adaptation(
     w = check_last_axis(as_float_array(XYZ_w, "XYZ_w"), "XYZ_w", 3)
     wr = check_last_axis(as_float_array(XYZ_wr, "XYZ_wr"), "XYZ_wr", 3)
     M_np = _cat_matrix(method)
-    dtype = jnp.result_type(w.dtype, wr.dtype)
+    check_broadcastable(("XYZ_w", w), ("XYZ_wr", wr))
+    w, wr = jnp.broadcast_arrays(w, wr.astype(w.dtype))
+    dtype = w.dtype
     M = jnp.asarray(M_np, dtype=dtype)
     M_inv = jnp.asarray(np.linalg.inv(M_np), dtype=dtype)
     gain = (wr @ M.T) / (w @ M.T)  # (..., 3) LMS_wr / LMS_w
@@ -87,6 +91,7 @@ def chromatic_adaptation(
     w = check_last_axis(as_float_array(XYZ_w, "XYZ_w"), "XYZ_w", 3).astype(XYZ.dtype)
     wr = check_last_axis(as_float_array(XYZ_wr, "XYZ_wr"), "XYZ_wr", 3).astype(XYZ.dtype)
     check_broadcastable(("XYZ", XYZ), ("XYZ_w", w), ("XYZ_wr", wr))
+    XYZ, w, wr = jnp.broadcast_arrays(XYZ, w, wr)
     M_np = _cat_matrix(method)
     M = jnp.asarray(M_np, dtype=XYZ.dtype)
     M_inv = jnp.asarray(np.linalg.inv(M_np), dtype=XYZ.dtype)

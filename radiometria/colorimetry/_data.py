@@ -6,18 +6,22 @@ JAX arrays. They are the CIE tabulations that colour-science 0.4.7 ships, copied
 `radiometria.colorimetry._make_data.build_data`; `data/provenance.json` records, per file, the
 primary source, the licence, the retrieval date and the sha256:
 
-| file | content | sha256 |
-|---|---|---|
-| `cmfs_xyz.npz` | CIE 1931 2°, CIE 1964 10° (360-830 nm), CIE 2015 2° and 10° (390-830 nm) XYZ CMFs, 1 nm | `a651608807bbbd1eeef16446ea8b16c5a768c8971be0d4b9203202ff3f359936` |
-| `cmfs_rgb.npz` | Wright & Guild 1931 2° CIE RGB CMFs, 380-780 nm, 5 nm | `0cf0455ed476617ebef14aa04eea96201775c88f4da814c6c86613f5e5d52d88` |
-| `illuminants.npz` | CIE A, D50, D55, D65, D75 (300-780 nm, 5 nm), E (360-830 nm, 5 nm), FL1-FL12 (380-780 nm, 5 nm) | `fe334b007f7b1ddce6cbab3470aa282670e5eeaae52b3659a5d0606e0832db95` |
-| `daylight_basis.npz` | CIE D-series basis S0, S1, S2, 300-830 nm, 5 nm | `488168b8bd757aafb13833e87f08782810cfdd27798916c7d6ecdd238de4147d` |
+- `cmfs_xyz.npz`: CIE 1931 2°, CIE 1964 10° (360-830 nm) and CIE 2015 2°, 10° (390-830 nm)
+  XYZ CMFs at 1 nm; sha256
+  `a651608807bbbd1eeef16446ea8b16c5a768c8971be0d4b9203202ff3f359936`.
+- `cmfs_rgb.npz`: Wright & Guild 1931 2° CIE RGB CMFs, 380-780 nm at 5 nm; sha256
+  `0cf0455ed476617ebef14aa04eea96201775c88f4da814c6c86613f5e5d52d88`.
+- `illuminants.npz`: CIE A, D50, D55, D65, D75 (300-780 nm), E (360-830 nm), FL1-FL12
+  (380-780 nm), all at 5 nm; sha256
+  `fe334b007f7b1ddce6cbab3470aa282670e5eeaae52b3659a5d0606e0832db95`.
+- `daylight_basis.npz`: CIE D-series basis S0, S1, S2, 300-830 nm at 5 nm; sha256
+  `488168b8bd757aafb13833e87f08782810cfdd27798916c7d6ecdd238de4147d`.
 
 Sources: CIE 015:2018 / CIE 15:2004 tables (`CIE2018`, `CIE2004`), CIE 170-2:2015 via CVRL
 (http://cvrl.ioo.ucl.ac.uk), Broadbent (2009) for the Wright & Guild RGB CMFs; CIE data tables
 (https://cie.co.at/data-tables, CC BY-SA 4.0) as redistributed by colour-science (BSD-3-Clause).
-Retrieved 2025 from colour-science 0.4.7. `tests/colorimetry/test_data.py` checks the values
-against colour-science and the sha256 against this table and `provenance.json`.
+Extracted on 2026-11-22 from colour-science 0.4.7. `tests/colorimetry/test_data.py` checks the
+values against colour-science and the sha256 against this list and `provenance.json`.
 """
 
 import json
@@ -94,7 +98,7 @@ class TabulatedSpectra(eqx.Module):
     """
 
     wavelengths_nm: Float[Array, " n"]
-    values: Float[Array, "n *k"]
+    values: Float[Array, " n *k"]
     name: str = eqx.field(static=True, default="")
 
     def __check_init__(self):
@@ -110,9 +114,7 @@ class TabulatedSpectra(eqx.Module):
         default extrapolator)."""
         check_choice(extrapolation, "extrapolation", ["zero", "constant"])
         wl = as_float_array(wavelength_nm, "wavelength_nm")
-        return interpolate_table(
-            self.wavelengths_nm, self.values, wl, extrapolation=extrapolation
-        )
+        return interpolate_table(self.wavelengths_nm, self.values, wl, extrapolation=extrapolation)
 
 
 def interpolate_table(
@@ -126,7 +128,9 @@ def interpolate_table(
     left = right = 0.0 if extrapolation == "zero" else None
     if fp.ndim == 1:
         return jnp.interp(wavelength_nm, xp, fp, left=left, right=right)
-    cols = [jnp.interp(wavelength_nm, xp, fp[:, j], left=left, right=right) for j in range(fp.shape[1])]
+    cols = [
+        jnp.interp(wavelength_nm, xp, fp[:, j], left=left, right=right) for j in range(fp.shape[1])
+    ]
     return jnp.stack(cols, axis=-1)
 
 

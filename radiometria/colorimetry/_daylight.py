@@ -30,7 +30,9 @@ def daylight_locus_xy(cct: ArrayLike) -> Float[Array, "*batch 2"]:
     return jnp.stack([x, y], axis=-1)
 
 
-def daylight_M1_M2(xy: Float[ArrayLike, "*batch 2"], *, rounding: bool = True) -> Float[Array, "*batch 2"]:
+def daylight_M1_M2(
+    xy: Float[ArrayLike, "*batch 2"], *, rounding: bool = True
+) -> Float[Array, "*batch 2"]:
     r"""The D-series weights $M_1, M_2$ of $S = S_0 + M_1 S_1 + M_2 S_2$ for daylight xy.
 
     $M = 0.0241 + 0.2562 x - 0.7341 y$, $M_1 = (-1.3515 - 1.7703 x + 5.9114 y)/M$,
@@ -81,4 +83,5 @@ def daylight_spd(
         raise ValueError(f"`wavelengths_nm` must be 1-D (n,), got shape {wl.shape}. [nm]")
     M = daylight_M1_M2(daylight_locus_xy(T), rounding=rounding).astype(wl.dtype)
     S = interpolate_table(DAYLIGHT_BASIS_WAVELENGTHS, DAYLIGHT_BASIS, wl)  # (n, 3)
-    return S[:, 0] + M[..., 0:1] * S[:, 1] + M[..., 1:2] * S[:, 2]
+    S = S.reshape((1,) * (M.ndim - 1) + S.shape)  # explicit broadcasting over the batch axes
+    return S[..., 0] + M[..., 0:1] * S[..., 1] + M[..., 1:2] * S[..., 2]

@@ -1,4 +1,5 @@
-r"""Colour differences in CIELAB: Delta E*ab (CIE 1976), Delta E*94 (CIE 1994), Delta E00 (CIEDE2000).
+r"""Colour differences in CIELAB: Delta E*ab (CIE 1976), Delta E*94 (CIE 1994) and
+Delta E00 (CIEDE2000).
 
 All three take Lab (..., 3) pairs that broadcast and return (...,) [dimensionless, CIELAB
 units]. Square roots are guarded so that identical colours (Delta E = 0) and neutral colours
@@ -21,12 +22,14 @@ def _pair(Lab_1, Lab_2):
 
 
 def _safe_sqrt(x: Array) -> Array:
-    """sqrt(max(x, 0)) with a zero gradient where x <= 0."""
-    pos = x > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
+    """sqrt(max(x, 0)) with a zero gradient where x <= 0; NaN propagates."""
+    nonpos = x <= 0
+    return jnp.where(nonpos, 0.0, jnp.sqrt(jnp.where(nonpos, 1.0, x)))
 
 
-def delta_E_CIE1976(Lab_1: Float[ArrayLike, "*#batch 3"], Lab_2: Float[ArrayLike, "*#batch 3"]) -> Float[Array, "..."]:
+def delta_E_CIE1976(
+    Lab_1: Float[ArrayLike, "*#batch 3"], Lab_2: Float[ArrayLike, "*#batch 3"]
+) -> Float[Array, "..."]:
     r"""CIE 1976 colour difference $\Delta E^*_{ab}$: the Euclidean distance in CIELAB.
 
     ??? cite "References"
@@ -38,7 +41,9 @@ def delta_E_CIE1976(Lab_1: Float[ArrayLike, "*#batch 3"], Lab_2: Float[ArrayLike
 
 
 def delta_E_CIE1994(
-    Lab_1: Float[ArrayLike, "*#batch 3"], Lab_2: Float[ArrayLike, "*#batch 3"], textiles: bool = False
+    Lab_1: Float[ArrayLike, "*#batch 3"],
+    Lab_2: Float[ArrayLike, "*#batch 3"],
+    textiles: bool = False,
 ) -> Float[Array, "..."]:
     r"""CIE 1994 colour difference $\Delta E^*_{94}$ (asymmetric: `Lab_1` is the reference).
 
@@ -64,7 +69,9 @@ def delta_E_CIE1994(
 
 
 def delta_E_CIE2000(
-    Lab_1: Float[ArrayLike, "*#batch 3"], Lab_2: Float[ArrayLike, "*#batch 3"], textiles: bool = False
+    Lab_1: Float[ArrayLike, "*#batch 3"],
+    Lab_2: Float[ArrayLike, "*#batch 3"],
+    textiles: bool = False,
 ) -> Float[Array, "..."]:
     r"""CIEDE2000 colour difference $\Delta E_{00}$ (Sharma, Wu & Dalal 2005 implementation).
 
@@ -104,7 +111,9 @@ def delta_E_CIE2000(
     C_bar_p = 0.5 * (C_p_1 + C_p_2)
     h_sum = h_p_1 + h_p_2
     far = jnp.abs(h_p_1 - h_p_2) > 180.0
-    h_bar = jnp.where(far, jnp.where(h_sum < 360.0, (h_sum + 360.0) / 2.0, (h_sum - 360.0) / 2.0), h_sum / 2.0)
+    h_bar = jnp.where(
+        far, jnp.where(h_sum < 360.0, (h_sum + 360.0) / 2.0, (h_sum - 360.0) / 2.0), h_sum / 2.0
+    )
     h_bar = jnp.where(neutral, h_sum, h_bar)
 
     T = (

@@ -1,4 +1,4 @@
-"""Offline builder of the packaged CIE tables in `radiometria/colorimetry/data/` (not run at import).
+"""Offline builder of the CIE tables in `radiometria/colorimetry/data/` (never run at import).
 
 The tables are the CIE tabulations that colour-science ships (`colour.MSDS_CMFS`,
 `colour.SDS_ILLUMINANTS`, `SDS_BASIS_FUNCTIONS_CIE_ILLUMINANT_D_SERIES`), copied unchanged as
@@ -54,7 +54,9 @@ FILES = {
     },
     "cmfs_rgb.npz": {
         "family": "CIE 1931 RGB colour-matching functions (Wright & Guild), 5 nm",
-        "colour_object": "colour.colorimetry.MSDS_CMFS_RGB[...] (colour/colorimetry/datasets/cmfs.py)",
+        "colour_object": (
+            "colour.colorimetry.MSDS_CMFS_RGB[...] (colour/colorimetry/datasets/cmfs.py)"
+        ),
         "primary_source": (
             "Broadbent, A. D. (2009). Calculation from the original experimental data of the CIE "
             "1931 RGB standard observer spectral chromaticity co-ordinates and color matching "
@@ -64,9 +66,12 @@ FILES = {
     },
     "illuminants.npz": {
         "family": "CIE standard illuminants A, D50, D55, D65, D75, E, FL1-FL12 (relative SPD)",
-        "colour_object": "colour.SDS_ILLUMINANTS[...] (colour/colorimetry/datasets/illuminants/sds.py)",
+        "colour_object": (
+            "colour.SDS_ILLUMINANTS[...] (colour/colorimetry/datasets/illuminants/sds.py)"
+        ),
         "primary_source": (
-            "CIE 15:2004 tables, https://law.resource.org/pub/us/cfr/ibr/003/cie.15.2004.tables.xls "
+            "CIE 15:2004 tables, "
+            "https://law.resource.org/pub/us/cfr/ibr/003/cie.15.2004.tables.xls "
             "and http://files.cie.co.at/204.xls"
         ),
         "tables": ILLUMINANTS,
@@ -99,7 +104,9 @@ def _write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
         with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as zf:
             for name in sorted(arrays):
                 buf = io.BytesIO()
-                np.lib.format.write_array(buf, np.ascontiguousarray(arrays[name]), allow_pickle=False)
+                np.lib.format.write_array(
+                    buf, np.ascontiguousarray(arrays[name]), allow_pickle=False
+                )
                 info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
                 info.compress_type = zipfile.ZIP_DEFLATED
                 info.external_attr = 0o644 << 16
@@ -148,7 +155,7 @@ def build_data(out_dir: Path | str = DATA_DIR) -> dict:
     out_dir.mkdir(parents=True, exist_ok=True)
     tables = colour_tables()
     provenance = {
-        "description": "CIE tables packaged with radiometria.colorimetry (float64, .npz per family).",
+        "description": "CIE tables packaged with radiometria.colorimetry (float64 .npz files).",
         "licence": _CIE_LICENCE,
         "extracted_with": f"colour-science {colour.__version__}",
         "retrieved": datetime.date.today().isoformat(),

@@ -71,7 +71,7 @@ def XYZ_to_Lab(XYZ: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array
         `CIE2018` section 8.2.1.
     """
     XYZ = _vec3(XYZ, "XYZ")
-    w = _white(white_XYZ, XYZ.dtype)
+    XYZ, w = jnp.broadcast_arrays(XYZ, _white(white_XYZ, XYZ.dtype))
     f = _f_lab(XYZ / w)
     fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
     return jnp.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)
@@ -84,7 +84,7 @@ def Lab_to_XYZ(Lab: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array
         `CIE2018` section 8.2.1.
     """
     Lab = _vec3(Lab, "Lab")
-    w = _white(white_XYZ, Lab.dtype)
+    Lab, w = jnp.broadcast_arrays(Lab, _white(white_XYZ, Lab.dtype))
     fy = (Lab[..., 0] + 16.0) / 116.0
     fx = fy + Lab[..., 1] / 500.0
     fz = fy - Lab[..., 2] / 200.0
@@ -92,10 +92,10 @@ def Lab_to_XYZ(Lab: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array
 
 
 def _safe_norm2(a: Array, b: Array) -> Array:
-    """sqrt(a^2 + b^2) with a zero (not NaN) gradient at the origin."""
+    """sqrt(a^2 + b^2) with a zero (not NaN) gradient at the origin; NaN propagates."""
     r2 = a * a + b * b
-    pos = r2 > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, r2, 1.0)), 0.0)
+    zero = r2 <= 0
+    return jnp.where(zero, 0.0, jnp.sqrt(jnp.where(zero, 1.0, r2)))
 
 
 def _hue_degrees(b: Array, a: Array) -> Array:

@@ -71,9 +71,14 @@ def bt709_oetf(L: ArrayLike) -> Array:
 
 
 def bt709_oetf_inverse(V: ArrayLike) -> Array:
-    """Inverse of `bt709_oetf`: L = V/4.5 below 0.081, else ((V + 0.099)/1.099)^(1/0.45)."""
+    """Inverse of `bt709_oetf`: L = V/4.5 below V(0.018) = 0.0812, else
+    ((V + 0.099)/1.099)^(1/0.45).
+
+    The threshold is the power segment at L = 0.018 (the two segments of the rounded BT.709
+    constants differ by 2e-4 there), as in colour-science.
+    """
     V = as_float_array(V, "V")
-    big = V >= 4.5 * 0.018
+    big = V >= 1.099 * 0.018**0.45 - 0.099
     return jnp.where(big, ((jnp.where(big, V, 1.0) + 0.099) / 1.099) ** (1.0 / 0.45), V / 4.5)
 
 
@@ -378,7 +383,10 @@ def matrix_RGB_to_RGB(
     b = get_colourspace(output_colourspace)
     M = a.matrix_RGB_to_XYZ
     if chromatic_adaptation_transform is not None:
-        M = _adaptation_matrix(a.whitepoint_XYZ, b.whitepoint_XYZ, chromatic_adaptation_transform) @ M
+        M = (
+            _adaptation_matrix(a.whitepoint_XYZ, b.whitepoint_XYZ, chromatic_adaptation_transform)
+            @ M
+        )
     return b.matrix_XYZ_to_RGB @ M
 
 

@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._checks import as_float_array, check_last_axis
+from .._checks import as_float_array, check_broadcastable, check_last_axis
 from ..constants import K_M
 from ._data import (
     CMFS_XYZ,
@@ -35,7 +35,9 @@ from ._data import (
 def _grid(wavelengths_nm, name: str = "wavelengths_nm") -> Array:
     wl = as_float_array(wavelengths_nm, name)
     if wl.ndim != 1 or wl.shape[0] < 2:
-        raise ValueError(f"`{name}` must be a 1-D grid of >= 2 wavelengths [nm], got shape {wl.shape}.")
+        raise ValueError(
+            f"`{name}` must be a 1-D grid of >= 2 wavelengths [nm], got shape {wl.shape}."
+        )
     if not _is_tracer(wl) and not bool(np.all(np.diff(np.asarray(wl)) > 0)):
         raise ValueError(f"`{name}` must be strictly increasing [nm].")
     return wl
@@ -60,7 +62,9 @@ def _illuminant_on_grid(illuminant, wl: Array) -> Array:
         return interpolate_table(twl, tv, wl, extrapolation="constant")
     if isinstance(illuminant, TabulatedSpectra):
         if illuminant.values.ndim != 1:
-            raise ValueError(f"`illuminant` must hold one spectrum, got values {illuminant.values.shape}.")
+            raise ValueError(
+                f"`illuminant` must hold one spectrum, got values {illuminant.values.shape}."
+            )
         return interpolate_table(
             illuminant.wavelengths_nm, illuminant.values, wl, extrapolation="constant"
         )
@@ -83,7 +87,8 @@ def tristimulus_weights(
     The fast path of `sd_to_XYZ` for many spectra on one fixed grid: compute W once, then each
     batch is one matrix product (memory bound). Emissive (`illuminant=None`):
     $W_{ik} = K_m\,\bar c_k(\lambda_i)\,\Delta\lambda_i$; reflective:
-    $W_{ik} = S(\lambda_i)\,\bar c_k(\lambda_i)\,\Delta\lambda_i / \sum_j S(\lambda_j)\bar y(\lambda_j)\Delta\lambda_j$.
+    $W_{ik} = S(\lambda_i)\,\bar c_k(\lambda_i)\,\Delta\lambda_i
+    / \sum_j S(\lambda_j)\bar y(\lambda_j)\Delta\lambda_j$.
 
     **Arguments:**
 
@@ -164,11 +169,17 @@ def sd_to_XYZ(
     wl = _grid(wavelengths_nm)
     check_last_axis(v, "values", wl.shape[0])
     wl = wl.astype(v.dtype)
-    if illuminant is None or isinstance(illuminant, str | TabulatedSpectra) or jnp.ndim(illuminant) == 1:
+    if (
+        illuminant is None
+        or isinstance(illuminant, str | TabulatedSpectra)
+        or jnp.ndim(illuminant) == 1
+    ):
         w = tristimulus_weights(wl, illuminant, observer)
         return v @ w
     # A batch of illuminants (..., n): normalise each separately.
     s = _illuminant_on_grid(illuminant, wl).astype(v.dtype)
+    check_broadcastable(("values", v), ("illuminant", s))
+    v, s = jnp.broadcast_arrays(v, s)
     name = resolve_observer(observer, allow_rgb=False)
     cmf_wl, cmf_v = CMFS_XYZ[name]
     cw = interpolate_table(cmf_wl, cmf_v, wl) * cell_widths(wl)[:, None]

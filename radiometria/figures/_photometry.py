@@ -24,7 +24,9 @@ def fig_2_luminous_efficiency(out_dir, *, smoke: bool = False):
         peak = wavelengths_nm[values == values.max()].mean()
         ax.plot(wavelengths_nm, values, color=colour, label=f"{label}, peak {peak:.0f} nm")
         ax.axvline(peak, color=colour, lw=0.6, ls=":")
-        ax_k.plot(wavelengths_nm, efficacy * values, color=colour, label=f"{symbol} = {efficacy:g} lm/W")
+        ax_k.plot(
+            wavelengths_nm, efficacy * values, color=colour, label=f"{symbol} = {efficacy:g} lm/W"
+        )
     ax.set_xlabel("wavelength [nm]")
     ax.set_ylabel("spectral luminous efficiency [-]")
     ax.set_title("Luminous efficiency functions")

@@ -25,7 +25,13 @@ def fig_1_planck(out_dir, *, smoke: bool = False):
     # Wien's locus: the peak (lambda_max(T), L(lambda_max(T), T)) traced over temperature.
     locus_t = np.geomspace(2000.0, 8000.0, 100)
     peak_nm = np.asarray(planck_peak_wavelength(locus_t))
-    ax.loglog(peak_nm, np.asarray(planck(peak_nm, locus_t)), "k--", lw=1, label=r"Wien: $\lambda_{max} = b/T$")
+    ax.loglog(
+        peak_nm,
+        np.asarray(planck(peak_nm, locus_t)),
+        "k--",
+        lw=1,
+        label=r"Wien: $\lambda_{max} = b/T$",
+    )
     peaks_nm = np.asarray(planck_peak_wavelength(np.asarray(temperatures)))
     ax.plot(peaks_nm, np.asarray(planck(peaks_nm, np.asarray(temperatures))), "ko", ms=3)
     ax.set_xlim(wavelengths_nm[0], wavelengths_nm[-1])

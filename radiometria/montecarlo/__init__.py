@@ -67,3 +67,10 @@ from ._warps import (
 )
 from ._sobol import sobol as sobol
 from ._halton import halton as halton
+from ._samplers import (
+    independent as independent,
+    kronecker as kronecker,
+    latin_hypercube as latin_hypercube,
+    rank1_lattice as rank1_lattice,
+    stratified as stratified,
+)

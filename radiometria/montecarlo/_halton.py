@@ -108,18 +108,18 @@ def _digits_for_precision(bases: np.ndarray, dtype) -> np.ndarray:
     return np.ceil(bits / np.log2(bases)).astype(np.int64) - 1
 
 
-@functools.partial(jax.jit, static_argnames=("n", "d", "skip", "dtype"))
-def _halton_plain(n: int, d: int, skip: int, dtype) -> Array:
+@functools.partial(jax.jit, static_argnames=("n", "d", "n_digits", "dtype"))
+def _halton_plain(start: Array, n: int, d: int, n_digits: int, dtype) -> Array:
     bases = first_primes(d)
     b = jnp.asarray(bases.astype(np.uint32))[None, :]
     bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
     q = jnp.broadcast_to(
-        (jnp.asarray(skip, jnp.uint32) + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d)
+        (start + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d)
     )
     seq = jnp.zeros((n, d), dtype)
     b2r = jnp.ones((1, d), dtype) / bf
     # SciPy's loop: seq += (i mod b) / b^k, most significant power last, same rounding order.
-    for _ in range(max(1, math.ceil(math.log2(skip + n)))):
+    for _ in range(n_digits):
         rem = q % b
         seq = seq + jnp.where(q > 0, rem.astype(dtype) * b2r, 0.0)
         b2r = b2r / bf
@@ -135,16 +135,15 @@ def _permutation_tables(key: Key, bases: np.ndarray, n_digits: np.ndarray) -> Ar
     return jnp.argsort(jnp.where(valid, r, 2.0), axis=-1).astype(jnp.int32)
 
 
-def _digit_table(perms: Array, j: int, base: int, n_digits: int, idx: np.ndarray, k0: int, dtype):
-    """sum_{k=k0}^{n_digits-1} perm[j, k, digit_{k-k0}(idx)] base^-(k+1), for integer idx."""
-    q = jnp.asarray(idx)
-    out = jnp.zeros(idx.shape, dtype)
-    scale = float(base) ** -(k0 + 1)
-    for k in range(k0, n_digits):
-        digit = q % base
-        out = out + perms[j, k, digit].astype(dtype) * scale
-        q = q // base
-        scale /= base
+def _split(bases: np.ndarray, skip: int, n: int):
+    """Per dimension: digits k_lo in the low table, block b^k_lo, first hi index, hi count."""
+    end = skip + n
+    out = []
+    for base in bases.tolist():
+        k_lo = max(1, math.ceil(math.log(max(end, 2), base) / 2))
+        block = base**k_lo
+        first = skip - skip % block
+        out.append((k_lo, block, first // block, -(-(end - first) // block), skip - first))
     return out
 
 
@@ -152,19 +151,44 @@ def _digit_table(perms: Array, j: int, base: int, n_digits: int, idx: np.ndarray
 def _halton_permuted(key: Key, n: int, d: int, skip: int, dtype) -> Array:
     bases = first_primes(d)
     n_digits = _digits_for_precision(bases, dtype)
-    perms = _permutation_tables(key, bases, n_digits)
-    end = skip + n
+    k_total = int(n_digits.max())
+    perms = _permutation_tables(key, bases, n_digits)  # (d, K, b_max)
+    b_max = perms.shape[-1]
+    flat_perms = perms.reshape(d, k_total * b_max)
+    split = _split(bases, skip, n)
+    k_lo = np.array([s[0] for s in split])
+    b_max_block = max(s[1] for s in split)
+    h_max = max(s[3] for s in split)
+    bu = jnp.asarray(bases.astype(np.uint32))[:, None]
+    bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[:, None]
+    k_lo_j = jnp.asarray(k_lo.astype(np.int32))[:, None]
+    nd_j = jnp.asarray(n_digits.astype(np.int32))[:, None]
+
+    def add_digits(q, val, scale, pos0, n_steps, limit):
+        def body(t, carry):
+            q, val, scale = carry
+            digit = q % bu
+            pos = pos0 + t
+            idx = jnp.minimum(pos, k_total - 1) * b_max + digit.astype(jnp.int32)
+            p = jnp.take_along_axis(flat_perms, idx, axis=1)
+            val = val + jnp.where(pos < limit, p.astype(dtype) * scale, 0.0)
+            return q // bu, val, scale / bf
+
+        return jax.lax.fori_loop(0, n_steps, body, (q, val, scale))[1]
+
+    # Low tables T_lo[j, r] over digit positions 0 .. k_lo_j - 1 of r < b_j^k_lo_j.
+    r = jnp.broadcast_to(jnp.arange(b_max_block, dtype=jnp.uint32)[None, :], (d, b_max_block))
+    zeros_lo = jnp.zeros((d, b_max_block), dtype)
+    t_lo = add_digits(r, zeros_lo, 1.0 / bf, 0, int(k_lo.max()), jnp.minimum(k_lo_j, nd_j))
+    # High tables T_hi[j, q] over digit positions k_lo_j .. n_digits_j - 1 (trailing zeros too).
+    hi0 = jnp.asarray(np.array([s[2] for s in split], dtype=np.uint32))[:, None]
+    q = hi0 + jnp.arange(h_max, dtype=jnp.uint32)[None, :]
+    scale0 = jnp.power(bf, -(k_lo_j.astype(dtype) + 1.0))
+    t_hi = add_digits(q, jnp.zeros((d, h_max), dtype), scale0, k_lo_j, k_total, nd_j)
     cols = []
-    for j, base in enumerate(bases.tolist()):
-        k_lo = max(1, math.ceil(math.log(max(end, 2), base) / 2))
-        block = base**k_lo
-        first = skip - skip % block
-        n_hi = -(-(end - first) // block)
-        t_lo = _digit_table(perms, j, base, min(k_lo, n_digits[j]), np.arange(block), 0, dtype)
-        hi_idx = np.arange(first // block, first // block + n_hi)
-        t_hi = _digit_table(perms, j, base, int(n_digits[j]), hi_idx, k_lo, dtype)
-        col = (t_hi[:, None] + t_lo[None, :]).reshape(-1)[skip - first : skip - first + n]
-        cols.append(col)
+    for j, (_, block, _, n_hi, off) in enumerate(split):
+        col = (t_hi[j, :n_hi][:, None] + t_lo[j, :block][None, :]).reshape(-1)
+        cols.append(col[off : off + n])
     x = jnp.stack(cols, axis=1)
     return jnp.minimum(x, 1.0 - jnp.finfo(dtype).epsneg)
 
@@ -173,25 +197,27 @@ def _halton_permuted(key: Key, n: int, d: int, skip: int, dtype) -> Array:
 def _halton_owen(key: Key, n: int, d: int, skip: int, dtype) -> Array:
     bases = first_primes(d)
     n_digits = _digits_for_precision(bases, dtype)
-    b = jnp.asarray(bases.astype(np.uint32))[None, :]
+    bu = jnp.asarray(bases.astype(np.uint32))[None, :]
+    bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
     seeds = jax.random.bits(key, (1, d), jnp.uint32)
-    q = jnp.broadcast_to(
+    q0 = jnp.broadcast_to(
         (jnp.asarray(skip, jnp.uint32) + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d)
     )
-    nd = jnp.asarray(n_digits)[None, :]
-    prefix = jnp.zeros((n, d), jnp.uint32)  # hash of the less significant digits seen so far
-    out = jnp.zeros((n, d), dtype)
-    scale = jnp.ones((1, d), dtype) / jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
-    bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
-    for k in range(int(n_digits.max())):
-        digit = q % b
-        h = _mix32(seeds ^ _mix32(prefix ^ np.uint32((k * 0x9E3779B9) & 0xFFFFFFFF)))
-        pd = permutation_element(digit, b, h)
-        live = k < nd
-        out = out + jnp.where(live, pd.astype(dtype) * scale, 0.0)
+    nd = jnp.asarray(n_digits.astype(np.int32))[None, :]
+
+    def body(k, carry):
+        q, prefix, out, scale = carry
+        digit = q % bu
+        salt = (k.astype(jnp.uint32) * np.uint32(0x9E3779B9)) ^ prefix
+        h = _mix32(seeds ^ _mix32(salt))
+        permuted = permutation_element(digit, bu, h)
+        out = out + jnp.where(k < nd, permuted.astype(dtype) * scale, 0.0)
+        # The node of the next digit is identified by all digits below it (nested scrambling).
         prefix = _mix32(prefix + digit + np.uint32(1))
-        q = q // b
-        scale = scale / bf
+        return q // bu, prefix, out, scale / bf
+
+    init = (q0, jnp.zeros((n, d), jnp.uint32), jnp.zeros((n, d), dtype), 1.0 / bf)
+    out = jax.lax.fori_loop(0, int(n_digits.max()), body, init)[2]
     return jnp.minimum(out, 1.0 - jnp.finfo(dtype).epsneg)
 
 
@@ -242,7 +268,10 @@ def halton(
     if not jnp.issubdtype(dtype, jnp.floating):
         raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
     if scramble is None:
-        return _halton_plain(n, d, skip, dtype)
+        # `start` is a run-time argument: a fully constant input would be constant-folded by
+        # XLA with a different rounding than SciPy's loop.
+        n_digits = max(1, math.ceil(math.log2(skip + n)))
+        return _halton_plain(jnp.asarray(skip, jnp.uint32), n, d, n_digits, dtype)
     if scramble == "permutation":
         return _halton_permuted(key, n, d, skip, dtype)
     return _halton_owen(key, n, d, skip, dtype)

@@ -20,7 +20,9 @@ def _ratio(a: Array, b: Array) -> Array:
     return jnp.where(jnp.isinf(a), 1.0, r)
 
 
-def balance_heuristic(nf: FloatLike, f_pdf: FloatLike, ng: FloatLike, g_pdf: FloatLike) -> Array:
+def balance_heuristic(
+    nf: int | FloatLike, f_pdf: FloatLike, ng: int | FloatLike, g_pdf: FloatLike
+) -> Array:
     r"""Balance-heuristic MIS weight of a sample drawn from strategy f, with g as the other one.
 
     $$w_f = \frac{n_f p_f}{n_f p_f + n_g p_g}$$
@@ -43,7 +45,9 @@ def balance_heuristic(nf: FloatLike, f_pdf: FloatLike, ng: FloatLike, g_pdf: Flo
     return _ratio(f, g)
 
 
-def power_heuristic(nf: FloatLike, f_pdf: FloatLike, ng: FloatLike, g_pdf: FloatLike) -> Array:
+def power_heuristic(
+    nf: int | FloatLike, f_pdf: FloatLike, ng: int | FloatLike, g_pdf: FloatLike
+) -> Array:
     r"""Power-heuristic (beta = 2) MIS weight of a sample drawn from strategy f.
 
     $$w_f = \frac{(n_f p_f)^2}{(n_f p_f)^2 + (n_g p_g)^2}$$

@@ -16,6 +16,7 @@ the check's error in hot loops.
 import math
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_last_axis, check_unit_interval
@@ -553,11 +554,15 @@ def _sph_tri_setup(a, b, c):
     return n_ab, alpha, beta, gamma
 
 
-def _vertices(a, b, c):
+def _vertices(a, b, c, *others):
+    """Normalised vertices, broadcast (batch and all) against `others` (arrays `(..., k)`)."""
     a = check_last_axis(as_float_array(a, "a"), "a", 3)
     b = check_last_axis(as_float_array(b, "b"), "b", 3)
     c = check_last_axis(as_float_array(c, "c"), "c", 3)
-    return _normalize(a), _normalize(b), _normalize(c)
+    batch = np.broadcast_shapes(*(x.shape[:-1] for x in (a, b, c, *others)))
+    a, b, c = (jnp.broadcast_to(x, batch + (3,)) for x in (a, b, c))
+    others = tuple(jnp.broadcast_to(x, batch + x.shape[-1:]) for x in others)
+    return (_normalize(a), _normalize(b), _normalize(c), *others)
 
 
 def spherical_triangle_area(a: FloatLike, b: FloatLike, c: FloatLike) -> Array:
@@ -603,7 +608,7 @@ def sample_spherical_triangle(
         `Arvo1995`; `Pharr2023` §6.5.4 (`SampleSphericalTriangle`); thesis ch. 5.
     """
     u = _u(u, 2)
-    a, b, c = _vertices(a, b, c)
+    a, b, c, u = _vertices(a, b, c, u)
     _, alpha, beta, gamma = _sph_tri_setup(a, b, c)
     a_pi = alpha + beta + gamma
     ap_pi = PI + u[..., 0] * (a_pi - PI)  # area of the sub-triangle, plus pi
@@ -639,12 +644,13 @@ def spherical_triangle_pdf(
     ??? cite "References"
         `Arvo1995`; `Pharr2023` §6.5.4; thesis ch. 5.
     """
-    a, b, c = _vertices(a, b, c)
+    if w is None:
+        area = spherical_triangle_area(a, b, c)
+        return jnp.where(area > 0, 1.0 / jnp.where(area > 0, area, 1.0), 0.0)
+    w = check_last_axis(as_float_array(w, "w"), "w", 3)
+    a, b, c, w = _vertices(a, b, c, w)
     area = spherical_triangle_area(a, b, c)
     pdf = jnp.where(area > 0, 1.0 / jnp.where(area > 0, area, 1.0), 0.0)
-    if w is None:
-        return pdf
-    w = check_last_axis(as_float_array(w, "w"), "w", 3)
     orient = jnp.sign(_dot(jnp.cross(a, b), c))
     inside = (
         (orient * _dot(jnp.cross(a, b), w) >= 0)
@@ -671,8 +677,9 @@ def invert_spherical_triangle_sample(
     ??? cite "References"
         `Pharr2023` §6.5.4 (`InvertSphericalTriangleSample`); `Arvo1995`; thesis ch. 5.
     """
-    a, b, c = _vertices(a, b, c)
-    w = _normalize(check_last_axis(as_float_array(w, "w"), "w", 3))
+    w = check_last_axis(as_float_array(w, "w"), "w", 3)
+    a, b, c, w = _vertices(a, b, c, w)
+    w = _normalize(w)
     n_ab, alpha, beta, gamma = _sph_tri_setup(a, b, c)
     # c' is where the great circle through b and w meets the arc a-c.
     cp = _normalize(jnp.cross(jnp.cross(b, w), jnp.cross(c, a)))

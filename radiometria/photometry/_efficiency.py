@@ -58,7 +58,9 @@ def _check_vision(vision: str) -> tuple[np.ndarray, np.ndarray]:
     return lookup(_TABLES, vision, "vision")
 
 
-def luminous_efficiency_table(vision: str = "photopic") -> tuple[Float[Array, " n"], Float[Array, " n"]]:
+def luminous_efficiency_table(
+    vision: str = "photopic",
+) -> tuple[Float[Array, " n"], Float[Array, " n"]]:
     """The packaged CIE table of V(lambda) (photopic) or V'(lambda) (scotopic).
 
     **Arguments:**
@@ -144,7 +146,9 @@ def _write_tables(directory: Path | str = DATA_DIR, *, retrieved: str) -> dict:
         mapping, key = _COLOUR_NAMES[vision]
         sd = getattr(colorimetry, mapping)[key]
         lines = ["wavelength_nm,value"]
-        lines += [f"{w!r},{v!r}" for w, v in zip(sd.wavelengths.tolist(), sd.values.tolist(), strict=True)]
+        lines += [
+            f"{w!r},{v!r}" for w, v in zip(sd.wavelengths.tolist(), sd.values.tolist(), strict=True)
+        ]
         path = directory / filename
         tmp = path.with_suffix(".tmp")
         tmp.write_text("\n".join(lines) + "\n")

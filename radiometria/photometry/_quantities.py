@@ -113,16 +113,21 @@ def _named(name: str, quantity: str, equation: str, unit_in: str, unit_out: str,
 luminous_energy = _named("luminous_energy", "Luminous energy Q_v", "2.1", "J nm^-1", "lm s")
 luminous_flux = _named("luminous_flux", "Luminous flux Phi_v", "2.2", "W nm^-1", "lm")
 illuminance = _named("illuminance", "Illuminance E_v", "2.3", "W m^-2 nm^-1", "lx = lm m^-2")
-luminous_exitance = _named("luminous_exitance", "Luminous exitance M_v", "2.3", "W m^-2 nm^-1", "lm m^-2")
-luminous_intensity = _named("luminous_intensity", "Luminous intensity I_v", "2.4", "W sr^-1 nm^-1", "cd = lm sr^-1")
+luminous_exitance = _named(
+    "luminous_exitance", "Luminous exitance M_v", "2.3", "W m^-2 nm^-1", "lm m^-2"
+)
+luminous_intensity = _named(
+    "luminous_intensity", "Luminous intensity I_v", "2.4", "W sr^-1 nm^-1", "cd = lm sr^-1"
+)
 luminance = _named(
     "luminance",
     "Luminance L_v",
     "2.5",
     "W sr^-1 m^-2 nm^-1",
     "cd m^-2",
-    note="\n\n    With photopic vision this equals the emissive Y of the CIE 1931 2 degree observer, whose\n"
-    "    y-bar is the CIE 1924 V(lambda) (colour-science's tables agree to 5e-13).",
+    note="\n\n    With photopic vision this equals the emissive Y of the CIE 1931 2 degree\n"
+    "    observer, whose y-bar is the CIE 1924 V(lambda) (colour-science's tables agree\n"
+    "    to 5e-13).",
 )
 
 
@@ -166,7 +171,9 @@ def luminous_efficacy(
     luminous = integrate_spectrum(weighted, wavelengths_nm, axis=axis)
     radiant = integrate_spectrum(values, wavelengths_nm, axis=axis)
     radiant = eqx.error_if(
-        radiant, radiant == 0, "`spectral_values` integrate to 0 W: the luminous efficacy is undefined."
+        radiant,
+        radiant == 0,
+        "`spectral_values` integrate to 0 W: the luminous efficacy is undefined.",
     )
     return EFFICACY[vision] * (luminous / radiant)
 
@@ -178,9 +185,11 @@ def luminous_efficiency(
     vision: str = "photopic",
     axis: int = -1,
 ) -> Float[Array, "..."]:
-    r"""Luminous efficiency of radiation of a spectrum, $\int X V\,\mathrm d\lambda / \int X\,\mathrm d\lambda$.
+    r"""Luminous efficiency of radiation of a spectrum: the luminous efficacy over `K_m`.
 
-    The luminous efficacy divided by `K_m`, i.e. colour-science's `luminous_efficiency`.
+    $$\frac{\int X_{e,\lambda} V\,\mathrm d\lambda}{\int X_{e,\lambda}\,\mathrm d\lambda}$$
+
+    This is colour-science's `luminous_efficiency`.
 
     **Arguments:**
 
@@ -199,4 +208,7 @@ def luminous_efficiency(
     ??? cite "References"
         `CIE2019`.
     """
-    return luminous_efficacy(spectral_values, wavelengths_nm, vision=vision, axis=axis) / EFFICACY[vision]
+    return (
+        luminous_efficacy(spectral_values, wavelengths_nm, vision=vision, axis=axis)
+        / EFFICACY[vision]
+    )

@@ -21,7 +21,7 @@ nm-to-m conversion is folded once into the Python-float constants below, so no i
 
 import math
 
-import jax
+import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
@@ -79,7 +79,7 @@ def _prefactor_over_expm1(prefactor: Array, log_prefactor: Array, x: Array) -> A
     return jnp.where(small, direct, logarithmic)
 
 
-@jax.jit
+@eqx.filter_jit  # compiled once per shape/dtype for eager callers; inlined under an outer jit
 def _planck_nm(wavelength_nm: Array, temperature: Array) -> Array:
     wavelength_nm = check_positive(wavelength_nm, "wavelength_nm", "nm")
     temperature = check_positive(temperature, "temperature", "K")
@@ -91,7 +91,7 @@ def _planck_nm(wavelength_nm: Array, temperature: Array) -> Array:
     return _prefactor_over_expm1(prefactor, log_prefactor, x)
 
 
-@jax.jit
+@eqx.filter_jit
 def _planck_hz(frequency_hz: Array, temperature: Array) -> Array:
     frequency_hz = check_positive(frequency_hz, "frequency_hz", "Hz")
     temperature = check_positive(temperature, "temperature", "K")
@@ -117,15 +117,16 @@ def planck(wavelength_nm: FloatLike, temperature: FloatLike) -> Float[Array, "..
     - `wavelength_nm`: wavelength in vacuum, > 0. [nm]
     - `temperature`: thermodynamic temperature, > 0. [K]
 
-    The two arguments broadcast together. Python numbers and integer scalars are accepted;
-    integer *arrays* raise `TypeError` (convert them explicitly).
+    The two arguments broadcast together. Python floats are accepted; integer arrays raise
+    `TypeError` (convert them explicitly).
 
     **Returns:**
 
     Spectral radiance, >= 0, with the broadcast shape of the inputs. [W sr^-1 m^-2 nm^-1]
 
     Non-positive wavelengths or temperatures raise `equinox.EquinoxRuntimeError`, also under
-    `jax.jit`. NaN inputs are not errors: they propagate to NaN outputs.
+    `equinox.filter_jit` (under a bare `jax.jit`, JAX reports the same message as a
+    `jax.errors.JaxRuntimeError`). NaN inputs are not errors: they propagate to NaN outputs.
 
     Accuracy and range: for wavelengths from 1 nm to 1 mm and temperatures from 1 K to 1e6 K the
     result is finite, non-negative and never NaN in float32 and float64, and so are its

@@ -117,7 +117,10 @@ def spectral_density_per_nm_to_per_hz(
 def spectral_density_per_hz_to_per_nm(
     values_per_hz: FloatLike, frequency_hz: FloatLike
 ) -> Float[Array, "..."]:
-    r"""Convert a spectral density per frequency into one per wavelength, $f_\lambda = f_\nu \nu^2 / c$.
+    r"""Convert a spectral density per frequency into one per wavelength.
+
+    $$f_\lambda = f_\nu \left|\frac{\mathrm d\nu}{\mathrm d\lambda}\right|
+               = f_\nu\,\frac{\nu^2}{c}$$
 
     **Arguments:**
 
@@ -191,14 +194,16 @@ def irradiance_from_radiance(
         Thesis eq. (1.13), section 1.4.
     """
     radiance = _f(radiance, "radiance")
-    half_angle = check_in_range(_f(half_angle, "half_angle"), "half_angle", 0.0, math.pi / 2, unit="rad")
+    half_angle = check_in_range(
+        _f(half_angle, "half_angle"), "half_angle", 0.0, math.pi / 2, unit="rad"
+    )
     return math.pi * radiance * jnp.sin(half_angle) ** 2
 
 
 def radiance_from_irradiance(
     irradiance: FloatLike, half_angle: FloatLike = math.pi / 2
 ) -> Float[Array, "..."]:
-    r"""Uniform radiance that produces a given irradiance within a cone, $L = E / (\pi\sin^2\theta_0)$.
+    r"""Uniform radiance that gives an irradiance within a cone, $L = E / (\pi\sin^2\theta_0)$.
 
     The inverse of `irradiance_from_radiance`.
 
@@ -349,7 +354,9 @@ def etendue(
     distance: FloatLike,
     eta: FloatLike = 1.0,
 ) -> Float[Array, "..."]:
-    r"""Etendue of the beam between two small patches, $G = \eta^2 A_s\cos\theta_s A_r\cos\theta_r/d^2$.
+    r"""Etendue of the beam between two small patches.
+
+    $$G = \frac{\eta^2\, A_s\cos\theta_s\, A_r\cos\theta_r}{d^2}$$
 
     Symmetric in source and receiver (etendue is conserved), and so is the throughput of
     radiance: the flux from source to receiver is $\Phi = (L / \eta^2)\, G$.
@@ -370,7 +377,9 @@ def etendue(
     !!! note "Thesis"
         Thesis section 1.4.1 (def. 1.4.8).
     """
-    area_source = check_in_range(_f(area_source, "area_source"), "area_source", 0.0, math.inf, unit="m^2")
+    area_source = check_in_range(
+        _f(area_source, "area_source"), "area_source", 0.0, math.inf, unit="m^2"
+    )
     area_receiver = check_in_range(
         _f(area_receiver, "area_receiver"), "area_receiver", 0.0, math.inf, unit="m^2"
     )

@@ -29,6 +29,7 @@ of devices or hosts (up to float rounding of the per-step sums, which is identic
 same `batch`).
 """
 
+import functools
 import math
 import os
 from dataclasses import dataclass
@@ -39,17 +40,19 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import check_choice, check_positive_int
+from ..camera import Film, film_develop, film_samples_to_XYZ
 from ._integrators import DIMENSIONS_PER_BOUNCE, path_radiance
 from ._render_scene import RenderScene
 from ._samplers import SAMPLERS, pixel_samples
-from ._spectral import SpectrumTable, sample_hero_wavelengths, wavelength_grid_nm
+from ._spectral import sample_hero_wavelengths
 
-__all__ = ["INTEGRATORS", "estimate_render_memory", "render_prepared"]
+__all__ = ["INTEGRATORS", "estimate_render_memory", "render"]
+
 
 INTEGRATORS = ("path", "direct")
 CAMERA_DIMENSIONS = 4  # [filter x, filter y, wavelength, unused]: keeps bounce pairs aligned
 _MAX_PIXELS = 2**31 - 2**20  # pixel indices are int32
-_FILM_BYTES_PER_PIXEL = 4 * 8 + 3 * 8 + 3 * 4  # float64 sums + float64 XYZ + float32 RGB
+_FILM_BYTES_PER_PIXEL = 4 * 4 * 3  # float32 sums (H, W, 4), the developed image, a host copy
 
 
 def _available_host_memory() -> int:
@@ -100,32 +103,19 @@ def _plan(n_pixels: int, spp: int, batch: int, n_devices: int) -> _Plan:
     return _Plan(n_pixels, tile, passes, -(-n_pixels // tile), n_groups)
 
 
-def _cmf_table() -> tuple[SpectrumTable, float]:
-    """CIE 1931 2° x, y, z as three table rows, and the integral of y-bar over 360-830 nm."""
-    from ..colorimetry import get_cmfs
-
-    cmfs = get_cmfs()
-    grid = wavelength_grid_nm()
-    wl = np.asarray(cmfs.wavelengths_nm, np.float64)
-    v = np.asarray(cmfs.values, np.float64)
-    rows = np.stack([np.interp(grid, wl, v[:, j], left=0.0, right=0.0) for j in range(3)])
-    y_integral = float(np.trapezoid(rows[1], grid))
-    return SpectrumTable(jnp.asarray(rows, jnp.float32)), y_integral
-
-
 class _Kernel(eqx.Module):
-    """Everything a step reads: scene, camera, filter, CMFs (one pytree, replicated)."""
+    """Everything the paths of a step read: scene, camera, filter (one pytree, replicated)."""
 
     scene: RenderScene
     camera: object
     rfilter: object
-    cmfs: SpectrumTable
-    inv_y_integral: float = eqx.field(static=True)
+    cmfs: Film  # a 1 x 1 film: only its colour-matching functions are used here
 
 
-def _step_fn(kernel: _Kernel, key, pass_start, pixel, *, plan: _Plan, spp, width, max_depth,
-             rr_depth, integrator, sampler):
-    """Film contributions `(tile, 4)` = [sum w X, sum w Y, sum w Z, sum w] of one step."""
+def _paths_xyz(kernel: _Kernel, key, pass_start, pixel, *, plan: _Plan, spp, width, max_depth,
+               rr_depth, integrator, sampler):
+    """Per pixel of one device's share of a tile: `(t, 4)` = [sum w X, sum w Y, sum w Z, sum w]
+    over the step's passes."""
     dtype = jnp.float32
     n_dims = CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * (max_depth - 1)
     t = pixel.shape[0]
@@ -150,13 +140,7 @@ def _step_fn(kernel: _Kernel, key, pass_start, pixel, *, plan: _Plan, spp, width
         max_depth=max_depth,
         rr_depth=rr_depth if integrator == "path" else max_depth,
     )
-    # Spectral radiance -> XYZ: the mean over the hero wavelengths of L cmf / pdf.
-    n_hero = wavelength_nm.shape[-1]
-    scale = (kernel.inv_y_integral / n_hero) / jnp.where(pdf > 0, pdf, 1.0)
-    lw = jnp.where(pdf > 0, radiance * scale, 0.0)  # (n, 4)
-    rows = jnp.broadcast_to(jnp.arange(3, dtype=jnp.int32), (lw.shape[0], 3))
-    cmf = kernel.cmfs(rows, jnp.broadcast_to(wavelength_nm[:, None, :], (lw.shape[0], 3, n_hero)))
-    xyz = jnp.sum(cmf * lw[:, None, :], axis=-1)  # (n, 3)
+    xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
     ok = jnp.repeat(valid_pixel, k) & (jnp.tile(passes, t) < spp)
     ok = ok & jnp.all(jnp.isfinite(xyz), axis=-1)
     w = jnp.where(ok, weight.astype(dtype), 0.0)
@@ -165,29 +149,67 @@ def _step_fn(kernel: _Kernel, key, pass_start, pixel, *, plan: _Plan, spp, width
     return contrib.reshape(t, k, 4).sum(axis=1)
 
 
-def render_prepared(
-    scene: RenderScene,
-    camera,
-    rfilter,
+def render(
+    scene,
     *,
     spp: int,
     seed: int = 0,
-    max_depth: int = 8,
-    rr_depth: int = 5,
+    width: int | None = None,
+    height: int | None = None,
+    max_depth: int | None = None,
     integrator: str = "path",
     sampler: str = "independent",
     batch: int | None = None,
     progress: bool = True,
     devices=None,
+    camera=None,
+    rfilter=None,
+    rr_depth: int = 5,
     return_xyz: bool = False,
 ):
-    """Render a `RenderScene` seen by `camera` through `rfilter`; linear sRGB `(H, W, 3)`.
+    r"""Render a scene spectrally into a linear sRGB image (thesis ch. 8-9; eq. 2.35).
 
-    The driver behind `render` (see its docstring and the module docstring for the method).
-    `camera` is a `radiometria.camera.PinholeCamera` (its `width` and `height` give the image
-    size) and `rfilter` a `radiometria.camera` filter. With `return_xyz`, returns the XYZ image
-    `(H, W, 3)` instead of sRGB.
+    **Arguments:**
+
+    - `scene`: a built-in scene name (`"cornell-box"`, `"cornell-box-measured"`), a scene
+        file path, a loaded scene description (`load_scene`), or a `RenderScene` together with
+        `camera`.
+    - `spp`: samples (camera paths) per pixel, >= 1.
+    - `seed`: the seed of `jax.random.key`; the image is a deterministic function of it.
+    - `width`, `height`: image size [px]; default: the scene's film.
+    - `max_depth`: largest number of path segments (Mitsuba's meaning: 1 = emitters seen
+        directly, 2 = direct illumination); default: the scene's, else 8.
+    - `integrator`: `"path"` (NEE + MIS + Russian roulette) or `"direct"`.
+    - `sampler`: `"independent"` or `"sobol"` (padded Owen-scrambled Sobol).
+    - `batch`: paths traced per step (bounds memory); default: about 2^16 per CPU device,
+        2^20 per GPU, within the device memory.
+    - `progress`: show a tqdm progress bar on stderr.
+    - `devices`: the devices to shard the pixels over; default `jax.local_devices()`.
+    - `camera`, `rfilter`: a `radiometria.camera.PinholeCamera` and reconstruction filter, for
+        a `RenderScene` (default filter: Gaussian, stddev 0.5 px, radius 2 px).
+    - `rr_depth`: path segments before Russian roulette starts (Mitsuba's `rr_depth`, 5).
+    - `return_xyz`: return CIE XYZ instead of linear sRGB.
+
+    **Returns:**
+
+    The image `(height, width, 3)` float32: linear sRGB (D65 white, no tone mapping) or XYZ,
+    in the unit of the scene's radiance (a radiance spectrum $L$ gives
+    $Y = \int L \bar y / \int \bar y$).
+
+    Memory stays bounded by `batch`, never by `width x height x spp`; absurd image sizes are
+    refused with a `ValueError` before anything is allocated. See the module docstring for the
+    sharding over devices and hosts.
+
+    !!! note "Thesis"
+        Chapters 8-9 (light transport, titles only in the text); eq. 2.35 (filter importance
+        sampling and the weighted pixel estimate); section 2.2 (XYZ, sRGB).
+
+    ??? cite "References"
+        `Pharr2023` ch. 5, 13; `Jakob2022`; `Wilkie2014`.
     """
+    spp = check_positive_int(spp, "spp")
+    scene, camera, rfilter, scene_depth = _resolve_scene(scene, camera, rfilter, width, height)
+    max_depth = scene_depth if max_depth is None else max_depth
     spp = check_positive_int(spp, "spp")
     max_depth = check_positive_int(max_depth, "max_depth")
     rr_depth = check_positive_int(rr_depth, "rr_depth")
@@ -210,63 +232,60 @@ def render_prepared(
     if batch is None:
         batch = _default_batch(devices, n_triangles, max_depth)
     batch = check_positive_int(batch, "batch")
-    host_bytes, device_bytes = estimate_render_memory(width, height, batch, n_triangles, max_depth)
+    film_bytes, _ = estimate_render_memory(width, height, batch, n_triangles, max_depth)
     available = _available_host_memory()
-    if host_bytes > available // 2:
+    if film_bytes > available // 2:
         raise ValueError(
-            f"A {width} x {height} film needs about {host_bytes / 2**30:.1f} GiB of host memory "
+            f"A {width} x {height} film needs about {film_bytes / 2**30:.1f} GiB of memory "
             f"({_FILM_BYTES_PER_PIXEL} bytes per pixel), more than half of the "
-            f"{available / 2**30:.1f} GiB available; render a smaller image or crop."
+            f"{available / 2**30:.1f} GiB available; render a smaller image."
         )
     plan = _plan(n_pixels, spp, batch, len(devices))
-
-    cmfs, y_integral = _cmf_table()
-    kernel = _Kernel(scene, camera, rfilter, cmfs, 1.0 / y_integral)
-    step = _compiled_step(
-        plan, spp, width, max_depth, rr_depth, integrator, sampler, tuple(devices)
-    )
+    kernel = _Kernel(scene, camera, rfilter, Film(1, 1, dtype=jnp.float32))
+    step = _compiled_step(plan, spp, width, max_depth, rr_depth, integrator, sampler, tuple(devices))
     key = jax.random.key(int(seed))
-    film = np.zeros((plan.n_pixels, 4), np.float64)
+    film = Film(width, height, dtype=jnp.float32)
 
+    # Multi-host: process i of m takes steps i, i + m, ...; the films are summed at the end.
     n_proc, proc = jax.process_count(), jax.process_index()
-    steps = list(range(proc, plan.n_steps, n_proc))
+    steps = range(proc, plan.n_steps, n_proc)
     bar = _progress_bar(progress, total=len(steps) * plan.tile * plan.passes)
-    pending = None
-
-    def accumulate(item):
-        start, out = item
-        out = np.asarray(out, np.float64)
-        end = min(start + plan.tile, plan.n_pixels)
-        film[start:end] += out[: end - start]
-
     for i in steps:
         group, tile = divmod(i, plan.n_tiles)
-        start = tile * plan.tile
-        pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(start)
-        out = step(kernel, key, jnp.int32(group * plan.passes), pixel)
-        if pending is not None:
-            accumulate(pending)
-        pending = (start, out)
+        pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
+        film = step(film, kernel, key, jnp.int32(group * plan.passes), pixel)
         if bar is not None:
             bar.update(plan.tile * plan.passes)
-    if pending is not None:
-        accumulate(pending)
     if bar is not None:
         bar.close()
     if n_proc > 1:
         from jax.experimental import multihost_utils
 
-        film = np.asarray(multihost_utils.process_allgather(film), np.float64).sum(axis=0)
+        parts = multihost_utils.process_allgather((film.xyz_sum, film.weight_sum))
+        film = eqx.tree_at(
+            lambda f: (f.xyz_sum, f.weight_sum), film, tuple(jnp.sum(p, axis=0) for p in parts)
+        )
+    return film_develop(film, "XYZ" if return_xyz else "sRGB")
 
-    wsum = film[:, 3:4]
-    xyz = np.where(wsum != 0, film[:, :3] / np.where(wsum != 0, wsum, 1.0), 0.0)
-    xyz = xyz.reshape(height, width, 3)
-    if return_xyz:
-        return jnp.asarray(xyz, jnp.float32)
-    from ..colorimetry import RGB_COLOURSPACES
 
-    m = np.asarray(RGB_COLOURSPACES["sRGB"].matrix_XYZ_to_RGB, np.float64)
-    return jnp.asarray(xyz @ m.T, jnp.float32)
+def _resolve_scene(scene, camera, rfilter, width, height):
+    """(RenderScene, camera, filter, default max_depth) from what `render` was given."""
+    from ..camera import GaussianFilter
+
+    if isinstance(scene, RenderScene):
+        if camera is None:
+            raise ValueError("Rendering a `RenderScene` needs `camera` (a PinholeCamera).")
+        for name, value, have in (("width", width, camera.width), ("height", height, camera.height)):
+            if value is not None and value != have:
+                raise ValueError(
+                    f"`{name}`={value} differs from the camera's {have} [px]; build the camera "
+                    "with the image size you want."
+                )
+        return scene, camera, GaussianFilter() if rfilter is None else rfilter, 8
+    raise TypeError(
+        f"`scene` must be a scene name, a path, a loaded scene or a RenderScene, got "
+        f"{type(scene).__name__}."
+    )
 
 
 def _default_batch(devices, n_triangles: int, max_depth: int) -> int:
@@ -297,7 +316,7 @@ def _compiled_step(plan, spp, width, max_depth, rr_depth, integrator, sampler, d
     mesh = Mesh(np.asarray(devices), ("pixels",))
 
     def local(kernel, key, pass_start, pixel):
-        return _step_fn(
+        return _paths_xyz(
             kernel,
             key,
             pass_start,
@@ -311,14 +330,28 @@ def _compiled_step(plan, spp, width, max_depth, rr_depth, integrator, sampler, d
             sampler=sampler,
         )
 
-    sharded = jax.shard_map(
+    paths = jax.shard_map(
         local,
         mesh=mesh,
         in_specs=(P(), P(), P(), P("pixels")),
         out_specs=P("pixels"),
         check_vma=False,
     )
-    step = eqx.filter_jit(sharded)
+
+    @functools.partial(jax.jit, donate_argnums=0)
+    def step(film, kernel, key, pass_start, pixel):
+        # Each device traces its share of the tile; the per-pixel sums (already weighted, one
+        # entry per pixel, so the scatter has no duplicates and is deterministic everywhere)
+        # are added to the film's accumulators; indices past the image are dropped.
+        contrib = paths(kernel, key, pass_start, pixel)
+        xyz_sum = film.xyz_sum.reshape(-1, 3).at[pixel].add(contrib[:, :3], mode="drop")
+        weight_sum = film.weight_sum.reshape(-1).at[pixel].add(contrib[:, 3], mode="drop")
+        return eqx.tree_at(
+            lambda f: (f.xyz_sum, f.weight_sum),
+            film,
+            (xyz_sum.reshape(film.xyz_sum.shape), weight_sum.reshape(film.weight_sum.shape)),
+        )
+
     if len(_STEP_CACHE) > 16:
         _STEP_CACHE.clear()
     _STEP_CACHE[cache_key] = step

@@ -94,7 +94,7 @@ def sample_hero_wavelengths(u: Float[Array, "*batch"]) -> tuple[Array, Array]:
     from ..montecarlo import sample_visible_wavelengths, visible_wavelengths_pdf
 
     shift = jnp.arange(N_HERO_WAVELENGTHS, dtype=u.dtype) / N_HERO_WAVELENGTHS
-    ui = u[..., None] + shift
+    ui = u[..., None] + shift.reshape((1,) * u.ndim + (N_HERO_WAVELENGTHS,))
     ui = jnp.where(ui >= 1.0, ui - 1.0, ui)
     wavelength_nm = sample_visible_wavelengths(ui)
     return wavelength_nm, visible_wavelengths_pdf(wavelength_nm)

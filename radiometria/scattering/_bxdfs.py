@@ -149,6 +149,11 @@ def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array
     return x, y, z
 
 
+def _mirror_xy(w: Array) -> Array:
+    """Mirror reflection about +z: (-x, -y, z) (thesis eq. 3.8 in the local frame)."""
+    return jnp.concatenate([-w[..., :2], w[..., 2:]], axis=-1)
+
+
 def _check_mode(mode: str) -> str:
     return check_choice(mode, "mode", _MODES)
 
@@ -286,53 +291,74 @@ class DiffuseBxDF(AbstractBxDF):
 
 
 class OrenNayarBxDF(AbstractBxDF):
-    r"""Oren-Nayar reflection from rough Lambertian V-cavities (qualitative model).
+    r"""Oren-Nayar reflection from a rough surface of Lambertian V-cavities.
 
-    $$f = \frac{R}{\pi}\left(A + B\max(0, \cos(\varphi_i - \varphi_o))\sin\alpha\tan\beta\right),$$
-    $$A = 1 - \frac{\sigma^2}{2(\sigma^2 + 0.33)},\quad B = \frac{0.45\sigma^2}{\sigma^2 + 0.09},
-      \quad \alpha = \max(\theta_i,\theta_o),\ \beta = \min(\theta_i,\theta_o).$$
+    Two variants, chosen with the static `model` field:
 
-    Reciprocal; $\sigma = 0$ gives the Lambertian BRDF. The model loses some energy
-    (directional albedo < R for $\sigma > 0$), which is physical for a rough surface without
-    interreflections. Sampled with the cosine-weighted hemisphere.
+    - `"qualitative"` (default): the qualitative model of `Oren1994` (pbrt-v3),
+      $$f = \frac{R}{\pi}\left(A + B\max(0, \cos(\varphi_i - \varphi_o))\sin\alpha\tan\beta\right),$$
+      $$A = 1 - \frac{\sigma^2}{2(\sigma^2 + 0.33)},\quad B = \frac{0.45\sigma^2}{\sigma^2 + 0.09},
+        \quad \alpha = \max(\theta_i,\theta_o),\ \beta = \min(\theta_i,\theta_o),$$
+      with $\sigma$ the standard deviation of the facet slope angle in radians, [0, pi/2].
+      The model is a fit, not exactly energy conserving: for $R = 1$ its directional albedo
+      exceeds 1 by up to about 0.5 % near grazing `wo` when $\sigma$ is small
+      (`tests/scattering/test_bxdfs.py` measures it).
+    - `"fujii"`: Fujii's improved Oren-Nayar model (`Fujii2012`, the single-scattering lobe
+      of OpenPBR's EON, `Portsmouth2024`),
+      $$f = \frac{R}{\pi}\,\frac{1 + \sigma\,s/t}{1 + (\tfrac12 - \tfrac{2}{3\pi})\sigma},\quad
+        s = \omega_i\cdot\omega_o - \cos\theta_i\cos\theta_o,\quad
+        t = \begin{cases}\max(\cos\theta_i, \cos\theta_o) & s > 0\\ 1 & s \le 0\end{cases}$$
+      with a dimensionless roughness $\sigma \in [0, 1]$. Its directional albedo is at most
+      $R$ (exactly $R$ at grazing incidence), so it passes the white furnace test.
+
+    Both are reciprocal, give the Lambertian BRDF for $\sigma = 0$ and are sampled with the
+    cosine-weighted hemisphere (pdf $|\cos\theta_i|/\pi$).
 
     **Fields:**
 
     - `reflectance`: $R$ in [0, 1], `(..., n_lambda)`. [dimensionless]
-    - `sigma`: standard deviation of the facet slope angle, in [0, pi/2], `(...)`. [rad]
+    - `sigma`: roughness, `(...)`: slope-angle standard deviation in [0, pi/2] [rad] for
+        `"qualitative"`, dimensionless in [0, 1] for `"fujii"`.
+    - `model`: `"qualitative"` or `"fujii"`.
 
     !!! note "Thesis"
         Section 3.1 (diffuse and retroreflective reflection), eq. (3.4).
 
     ??? cite "References"
-        `Oren1994`; `Pharr2016` section 8.4.2.
+        `Oren1994`; `Pharr2016` section 8.4.2; `Fujii2012`; `Portsmouth2024`.
     """
 
     reflectance: Array
     sigma: Array
+    model: str = eqx.field(static=True)
 
-    def __init__(self, reflectance, sigma):
+    def __init__(self, reflectance, sigma, *, model: str = "qualitative"):
+        self.model = check_choice(model, "model", ("qualitative", "fujii"))
         r = _spectral(reflectance, "reflectance")
         self.reflectance = check_in_range(r, "reflectance", 0.0, 1.0, unit="dimensionless")
         s = as_float_array(sigma, "sigma")
-        self.sigma = check_in_range(s, "sigma", 0.0, float(np.pi / 2), unit="rad")
-
-    def _AB(self, sigma: Array) -> tuple[Array, Array]:
-        s2 = sigma * sigma
-        return 1.0 - s2 / (2.0 * (s2 + 0.33)), 0.45 * s2 / (s2 + 0.09)
+        if model == "qualitative":
+            self.sigma = check_in_range(s, "sigma", 0.0, float(np.pi / 2), unit="rad")
+        else:
+            self.sigma = check_in_range(s, "sigma", 0.0, 1.0, unit="dimensionless")
 
     def _value(self, wo: Array, wi: Array, r: Array, sigma: Array) -> Array:
-        A, B = self._AB(sigma)
         zo, zi = jnp.abs(wo[..., 2]), jnp.abs(wi[..., 2])
-        # cos(phi_i - phi_o) sin(theta_i) sin(theta_o) = wi_xy . wo_xy
+        # cos(phi_i - phi_o) sin(theta_i) sin(theta_o) = wi_xy . wo_xy  (= s of Fujii's model)
         dxy = wi[..., 0] * wo[..., 0] + wi[..., 1] * wo[..., 1]
-        max_cos_times_sins = jnp.maximum(0.0, dxy)
-        # sin(alpha) tan(beta) = sin_a sin_b / cos_b with beta the angle nearer the normal
-        # (larger |cos|); multiplied by cos(dphi) the sines cancel into the dot product.
         cos_b = jnp.maximum(zo, zi)
-        term = _safe_div(max_cos_times_sins, cos_b)
+        if self.model == "qualitative":
+            s2 = sigma * sigma
+            A = 1.0 - s2 / (2.0 * (s2 + 0.33))
+            B = 0.45 * s2 / (s2 + 0.09)
+            # sin(alpha) tan(beta) = sin_a sin_b / cos_b, beta the angle nearer the normal
+            # (larger |cos|); times cos(dphi) the sines combine into the dot product.
+            g = A + B * _safe_div(jnp.maximum(0.0, dxy), cos_b)
+        else:
+            t = jnp.where(dxy > 0, cos_b, 1.0)
+            g = (1.0 + sigma * _safe_div(dxy, t)) / (1.0 + (0.5 - 2.0 / (3.0 * np.pi)) * sigma)
         same = wo[..., 2] * wi[..., 2] > 0
-        v = (A + B * term)[..., None] * r * (1.0 / jnp.pi)
+        v = g[..., None] * r * (1.0 / jnp.pi)
         return jnp.where(same[..., None], v, 0.0)
 
     def f(self, wo, wi, *, mode: str = "radiance") -> Array:
@@ -425,7 +451,7 @@ class ConductorBxDF(AbstractBxDF):
         _, (wo, _u, _v, eta, k) = _broadcast(
             (wo, 1), (u_lobe, 0), (u2, 1), (self.eta, 1), (self.k, 1)
         )
-        wi = wo * jnp.asarray([-1.0, -1.0, 1.0], wo.dtype)
+        wi = _mirror_xy(wo)
         c = jnp.abs(wi[..., 2])
         F = _fr_conductor(c[..., None], eta, k)
         ok = c > 0
@@ -517,7 +543,7 @@ class DielectricBxDF(AbstractBxDF):
         R_h, etap_h = R[..., 0], etap[..., 0]
         reflect = u_lobe < R_h
         # Reflection about +z (thesis eq. 3.8).
-        wr = wo * jnp.asarray([-1.0, -1.0, 1.0], wo.dtype)
+        wr = _mirror_xy(wo)
         # Refraction (thesis eq. 3.12) through +z with the hero's relative index.
         sin2_t = (1.0 - cos_o * cos_o) / (etap_h * etap_h)
         cos_t = _safe_sqrt(1.0 - sin2_t)
@@ -827,7 +853,7 @@ def _distribution(ax: Array, ay: Array) -> TrowbridgeReitzDistribution:
 
 
 def _flip_z(w: Array) -> Array:
-    return w * jnp.asarray([1.0, 1.0, -1.0], w.dtype)
+    return jnp.concatenate([w[..., :2], -w[..., 2:]], axis=-1)
 
 
 class TwoSidedBxDF(AbstractBxDF):

@@ -232,6 +232,14 @@ class LUTFitResult(eqx.Module):
         }
 
 
+def _results_where(ok: np.ndarray) -> optx.RESULTS:
+    """An `optimistix.RESULTS` array: `successful` where `ok`, else `nonlinear_max_steps_reached`."""
+    flat = jax.vmap(
+        lambda o: optx.RESULTS.where(o, optx.RESULTS.successful, optx.RESULTS.nonlinear_max_steps_reached)
+    )(jnp.asarray(ok).ravel())
+    return jax.tree_util.tree_map(lambda a: a.reshape(ok.shape), flat)
+
+
 def _column_directions(resolution: int, dtype) -> np.ndarray:
     """Unit-brightness RGB of every column (3 res res, 3): e[l] = 1, e[l+1] = x, e[l+2] = y."""
     t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
@@ -252,21 +260,20 @@ class _Schedule:
 
 
 def _sweep(c_start, e, scale_ks, m, n_steps, chunk):
-    """Warm-started LM along the brightness nodes `scale_ks` (a `lax.scan`), every column."""
+    """Warm-started LM along the brightness nodes `scale_ks[1:]` (a `lax.scan`), every column.
 
-    def step(carry, z):
-        c, c_prev, z_prev, z_prevprev = carry
-        # Linear extrapolation of the coefficient curve in brightness (secant predictor).
-        ratio = (z - z_prev) / jnp.where(z_prev == z_prevprev, 1.0, z_prev - z_prevprev)
-        ratio = jnp.where(z_prev == z_prevprev, 0.0, jnp.clip(ratio, -2.0, 2.0))
-        guess = c + ratio * (c - c_prev)
+    Each node starts from the previous node's solution (pbrt's continuation); the first
+    Gauss-Newton step from there is the tangent predictor of the solution curve. (A secant
+    extrapolation of the coefficients was tried and rejected: the coefficient curves bend
+    sharply near black and white, and the extrapolated start fell into a wrong local minimum.)
+    """
+
+    def step(c, z):
         lab_t = target_Lab(e * z, m)
-        s = lm_iterate(lm_init(guess, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk)
-        return (s.c, c, z, z_prev), (s.c, jnp.sqrt(s.cost))
+        s = lm_iterate(lm_init(c, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk)
+        return s.c, (s.c, jnp.sqrt(s.cost))
 
-    z0 = scale_ks[0]
-    init = (c_start, c_start, z0, z0)
-    _, (cs, rs) = lax.scan(step, init, scale_ks[1:])
+    _, (cs, rs) = lax.scan(step, c_start, scale_ks[1:])
     return cs, rs
 
 
@@ -453,9 +460,7 @@ def fit_lut(
     resid_t = resid.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
     exact_t = exact.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
     ok = (resid_t <= tolerance) | exact_t
-    result = optx.RESULTS.where(
-        jnp.asarray(ok), optx.RESULTS.successful, optx.RESULTS.nonlinear_max_steps_reached
-    )
+    result = _results_where(ok)
     lut = RGBToSpectrumLUT(jnp.asarray(scale_np, dtype), jnp.asarray(table), model.colourspace)
     settings = {
         **model.description(),

@@ -7,4 +7,6 @@ import pytest
 def pytest_collection_modifyitems(items):
     for item in items:
         if "tests/colorimetry" in str(item.fspath).replace("\\", "/"):
-            item.add_marker(pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning"))
+            item.add_marker(
+                pytest.mark.filterwarnings("ignore::colour.utilities.ColourRuntimeWarning")
+            )

@@ -32,7 +32,8 @@ def test_get_cmfs_equals_colour():
         np.testing.assert_array_equal(np.asarray(c.values), ref.values)
     rgb = rc.get_cmfs("Wright & Guild 1931 2 Degree RGB CMFs")
     np.testing.assert_array_equal(
-        np.asarray(rgb.values), colour.colorimetry.MSDS_CMFS_RGB["Wright & Guild 1931 2 Degree RGB CMFs"].values
+        np.asarray(rgb.values),
+        colour.colorimetry.MSDS_CMFS_RGB["Wright & Guild 1931 2 Degree RGB CMFs"].values,
     )
 
 

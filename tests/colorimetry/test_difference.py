@@ -78,12 +78,20 @@ def test_delta_E_matches_colour_random(textiles):
     Lab_1 = rng.uniform([0, -100, -100], [100, 100, 100], (500, 3))
     Lab_2 = Lab_1 + rng.normal(0, 10, (500, 3))
     np.testing.assert_allclose(
-        rc.delta_E_CIE2000(Lab_1, Lab_2, textiles), colour.difference.delta_E_CIE2000(Lab_1, Lab_2, textiles), rtol=1e-10
+        rc.delta_E_CIE2000(Lab_1, Lab_2, textiles),
+        colour.difference.delta_E_CIE2000(Lab_1, Lab_2, textiles),
+        rtol=1e-10,
     )
     np.testing.assert_allclose(
-        rc.delta_E_CIE1994(Lab_1, Lab_2, textiles), colour.difference.delta_E_CIE1994(Lab_1, Lab_2, textiles), rtol=1e-10
+        rc.delta_E_CIE1994(Lab_1, Lab_2, textiles),
+        colour.difference.delta_E_CIE1994(Lab_1, Lab_2, textiles),
+        rtol=1e-10,
     )
-    np.testing.assert_allclose(rc.delta_E_CIE1976(Lab_1, Lab_2), colour.difference.delta_E_CIE1976(Lab_1, Lab_2), rtol=1e-12)
+    np.testing.assert_allclose(
+        rc.delta_E_CIE1976(Lab_1, Lab_2),
+        colour.difference.delta_E_CIE1976(Lab_1, Lab_2),
+        rtol=1e-12,
+    )
 
 
 def test_delta_E_broadcast_jit_vmap():

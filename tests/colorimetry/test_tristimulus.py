@@ -110,7 +110,11 @@ def test_sd_to_XYZ_batch_shapes_jit_vmap_grad():
     vm = jax.vmap(lambda r: rc.sd_to_XYZ(r, WL5, "D65"))(R.reshape(6, -1))
     np.testing.assert_allclose(vm.reshape(2, 3, 3), eager, rtol=1e-14)
     check_grads(lambda r: rc.sd_to_XYZ(r, WL5, "D65"), (R[0, 0],), order=2, modes=["fwd", "rev"])
-    check_grads(lambda s: rc.sd_to_XYZ(R[0, 0], WL5, s), (jnp.asarray(rng.uniform(0.5, 1, WL5.size)),), order=1)
+    check_grads(
+        lambda s: rc.sd_to_XYZ(R[0, 0], WL5, s),
+        (jnp.asarray(rng.uniform(0.5, 1, WL5.size)),),
+        order=1,
+    )
 
 
 def test_sd_to_XYZ_float32():
