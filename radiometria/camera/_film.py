@@ -1,9 +1,10 @@
-r"""Film: spectral radiance samples to XYZ, per-pixel accumulation, development to RGB (thesis 2.3.2).
+r"""Film: spectral samples to XYZ, per-pixel accumulation, development to RGB (thesis 2.3.2).
 
 A spectral sample of radiance $L(\lambda_j)$ at wavelengths $\lambda_j$ drawn with density
 $p(\lambda_j)$ ($j = 1..n_\lambda$, e.g. hero wavelengths) gives the unbiased tristimulus estimate
 
-$$\mathrm{XYZ} = \frac{1}{n_\lambda} \sum_j \frac{L(\lambda_j)\,\bar{\mathbf{x}}(\lambda_j)}{p(\lambda_j)}
+$$\mathrm{XYZ} = \frac{1}{n_\lambda} \sum_j
+\frac{L(\lambda_j)\,\bar{\mathbf{x}}(\lambda_j)}{p(\lambda_j)}
 \Big/ \int \bar{y}(\lambda)\,\mathrm{d}\lambda$$
 
 of $\int L \bar{\mathbf{x}} \,\mathrm{d}\lambda / \int \bar{y}\,\mathrm{d}\lambda$, with the CIE
@@ -79,7 +80,7 @@ class Film(eqx.Module):
     `cmf_values` (n, 3) [nm^-1] (normalised CMFs), `width`, `height` (static).
 
     !!! note "Thesis"
-        Section 2.3.2, eq. 2.34-2.35; section 2.2 (XYZ).
+        Thesis section 2.3.2, eq. 2.34-2.35; section 2.2 (XYZ).
 
     ??? cite "References"
         `Pharr2023` §5.4; `Jakob2022` (`hdrfilm`, `spectrum_to_xyz`); `CIE2018`.
@@ -151,11 +152,13 @@ def film_samples_to_XYZ(
         shape = np.broadcast_shapes(L.shape, wl.shape, p.shape)
     except ValueError:
         raise ValueError(
-            f"`L_lambda` {L.shape}, `wavelengths_nm` {wl.shape} and `pdf` {p.shape} do not broadcast."
+            f"`L_lambda` {L.shape}, `wavelengths_nm` {wl.shape} and `pdf` {p.shape} "
+            "do not broadcast."
         ) from None
     if shape != L.shape:
         raise ValueError(
-            f"`wavelengths_nm` {wl.shape} and `pdf` {p.shape} must broadcast to `L_lambda` {L.shape}."
+            f"`wavelengths_nm` {wl.shape} and `pdf` {p.shape} must broadcast to "
+            f"`L_lambda` {L.shape}."
         )
     dtype = L.dtype
     wl = jnp.broadcast_to(wl.astype(dtype), L.shape)
@@ -195,9 +198,7 @@ def _flat_pixel_index(film: Film, pixel, batch_shape: tuple[int, ...]) -> Array:
     return jnp.where(inside, y * film.width + x, n_pix)
 
 
-def film_add_XYZ(
-    film: Film, pixel: ArrayLike, XYZ: ArrayLike, weight: ArrayLike = 1.0
-) -> Film:
+def film_add_XYZ(film: Film, pixel: ArrayLike, XYZ: ArrayLike, weight: ArrayLike = 1.0) -> Film:
     r"""Add weighted tristimulus samples to their pixels (scatter-add; the sums of eq. 2.35).
 
     **Arguments:**
@@ -226,10 +227,14 @@ def film_add_XYZ(
     try:
         w = jnp.broadcast_to(w, batch)
     except ValueError:
-        raise ValueError(f"`weight` {w.shape} does not broadcast to the batch shape {batch}.") from None
+        raise ValueError(
+            f"`weight` {w.shape} does not broadcast to the batch shape {batch}."
+        ) from None
     idx = _flat_pixel_index(film, pixel, batch).reshape(-1)
     n_pix = film.width * film.height
-    xyz_sum = film.xyz_sum.reshape(n_pix, 3).at[idx].add((w[..., None] * xyz).reshape(-1, 3), mode="drop")
+    xyz_sum = (
+        film.xyz_sum.reshape(n_pix, 3).at[idx].add((w[..., None] * xyz).reshape(-1, 3), mode="drop")
+    )
     weight_sum = film.weight_sum.reshape(n_pix).at[idx].add(w.reshape(-1), mode="drop")
     return eqx.tree_at(
         lambda f: (f.xyz_sum, f.weight_sum),
@@ -317,7 +322,9 @@ def splat_samples(
     try:
         w = jnp.broadcast_to(w, batch).reshape(-1)
     except ValueError:
-        raise ValueError(f"`weight` {w.shape} does not broadcast to the batch shape {batch}.") from None
+        raise ValueError(
+            f"`weight` {w.shape} does not broadcast to the batch shape {batch}."
+        ) from None
     xy, xyz = xy.reshape(-1, 2).astype(dtype), xyz.reshape(-1, 3).astype(dtype)
     r = float(filter.radius)
     k = int(np.ceil(2 * r)) + 1
@@ -333,8 +340,10 @@ def splat_samples(
     ij = jnp.stack([px, py], axis=-1)
     idx = _flat_pixel_index(film, ij, f.shape).reshape(-1)
     n_pix = film.width * film.height
-    xyz_sum = film.xyz_sum.reshape(n_pix, 3).at[idx].add(
-        (f[..., None] * xyz[:, None, None, :]).reshape(-1, 3), mode="drop"
+    xyz_sum = (
+        film.xyz_sum.reshape(n_pix, 3)
+        .at[idx]
+        .add((f[..., None] * xyz[:, None, None, :]).reshape(-1, 3), mode="drop")
     )
     weight_sum = film.weight_sum.reshape(n_pix).at[idx].add(f.reshape(-1), mode="drop")
     return eqx.tree_at(
@@ -359,7 +368,9 @@ def film_merge(a: Film, b: Film) -> Film:
         Eq. 2.35 (the sums are additive).
     """
     if (a.width, a.height) != (b.width, b.height):
-        raise ValueError(f"Films differ in size: {a.width}x{a.height} and {b.width}x{b.height} [px].")
+        raise ValueError(
+            f"Films differ in size: {a.width}x{a.height} and {b.width}x{b.height} [px]."
+        )
     return eqx.tree_at(
         lambda f: (f.xyz_sum, f.weight_sum), a, (a.xyz_sum + b.xyz_sum, a.weight_sum + b.weight_sum)
     )

@@ -31,7 +31,9 @@ _CELLS_PER_PIXEL = 32  # resolution of the tabulated sampler (pbrt-v4 uses 32 pe
 
 def _check_param(value, name: str, *, positive: bool = True) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise TypeError(f"Filter parameter `{name}` must be a real number, got {type(value).__name__}.")
+        raise TypeError(
+            f"Filter parameter `{name}` must be a real number, got {type(value).__name__}."
+        )
     value = float(value)
     if not math.isfinite(value):
         raise ValueError(f"Filter parameter `{name}` must be finite, got {value}.")
@@ -41,7 +43,7 @@ def _check_param(value, name: str, *, positive: bool = True) -> float:
 
 
 def _integrate_cells(fn, edges: np.ndarray) -> np.ndarray:
-    """Integral of `fn` (NumPy, vectorised) over each cell [edges[i], edges[i+1]] (Gauss-Legendre)."""
+    """Integral of NumPy `fn` over each cell [edges[i], edges[i+1]] (Gauss-Legendre)."""
     a, b = edges[:-1, None], edges[1:, None]
     x = 0.5 * (b - a) * _GL_X[None, :] + 0.5 * (a + b)
     return (0.5 * (b - a)[:, 0]) * (fn(x) @ _GL_W)
@@ -68,7 +70,7 @@ class AbstractFilter(eqx.Module):
     weight $f/p$.
 
     !!! note "Thesis"
-        Section 2.3.2, eq. 2.31-2.35.
+        Thesis section 2.3.2, eq. 2.31-2.35.
 
     ??? cite "References"
         `Pharr2023` §8.8; `Ernst2006`.
@@ -78,7 +80,7 @@ class AbstractFilter(eqx.Module):
 
     @abc.abstractmethod
     def evaluate_1d(self, x: Array) -> Array:
-        """Normalised 1D profile $f_1(x)$ with unit integral, zero for $|x| \\ge r$ (`x` in [px]). [px^-1]"""
+        """Normalised 1D profile $f_1(x)$, unit integral, 0 for $|x| \\ge r$ (`x` [px]). [px^-1]"""
 
     @abc.abstractmethod
     def sample(self, u: ArrayLike) -> tuple[Float[Array, "*batch 2"], Float[Array, "*batch"]]:
@@ -152,7 +154,7 @@ class _AbstractAnalyticFilter(AbstractFilter):
 
 
 class BoxFilter(_AbstractAnalyticFilter):
-    r"""Box filter: $f_1(x) = 1 / (2r)$ for $|x| < r$ (default $r = 1/2$, one pixel; Mitsuba's `box`).
+    r"""Box filter: $f_1(x) = 1 / (2r)$ for $|x| < r$ (default $r = 1/2$: Mitsuba's `box`).
 
     Sampled exactly (uniform offsets), so every weight is 1.
 
@@ -161,7 +163,7 @@ class BoxFilter(_AbstractAnalyticFilter):
     - `radius`: half-width, > 0. [px]
 
     !!! note "Thesis"
-        Section 2.3.2.
+        Thesis section 2.3.2.
 
     ??? cite "References"
         `Pharr2023` §8.8.1.
@@ -183,7 +185,9 @@ class BoxFilter(_AbstractAnalyticFilter):
 
 
 class TentFilter(_AbstractAnalyticFilter):
-    r"""Tent (triangle) filter: $f_1(x) = (r - |x|)/r^2$ for $|x| < r$ (default $r = 1$, Mitsuba's `tent`).
+    r"""Tent (triangle) filter: $f_1(x) = (r - |x|)/r^2$ for $|x| < r$ (default $r = 1$).
+
+    Mitsuba's `tent`.
 
     Sampled exactly by inverting its CDF, so every weight is 1.
 
@@ -192,7 +196,7 @@ class TentFilter(_AbstractAnalyticFilter):
     - `radius`: half-width, > 0. [px]
 
     !!! note "Thesis"
-        Section 2.3.2.
+        Thesis section 2.3.2.
 
     ??? cite "References"
         `Pharr2023` §8.8.2.
@@ -239,7 +243,7 @@ class GaussianFilter(_AbstractAnalyticFilter):
     - `radius`: support half-width, > 0; `None` for $4\sigma$. [px]
 
     !!! note "Thesis"
-        Section 2.3.2.
+        Thesis section 2.3.2.
 
     ??? cite "References"
         `Jakob2022` (`gaussian` rfilter); `Pharr2023` §8.8.3.
@@ -326,7 +330,7 @@ class MitchellFilter(_AbstractTabulatedFilter):
     - `radius`: support half-width, > 0. [px]
 
     !!! note "Thesis"
-        Section 2.3.2, eq. 2.35.
+        Thesis section 2.3.2, eq. 2.35.
 
     ??? cite "References"
         `Mitchell1988`; `Pharr2023` §8.8.4.
@@ -349,7 +353,10 @@ class MitchellFilter(_AbstractTabulatedFilter):
         x = xp.abs(x)
         inner = ((12 - 9 * B - 6 * C) * x**3 + (-18 + 12 * B + 6 * C) * x**2 + (6 - 2 * B)) / 6
         outer = (
-            (-B - 6 * C) * x**3 + (6 * B + 30 * C) * x**2 + (-12 * B - 48 * C) * x + (8 * B + 24 * C)
+            (-B - 6 * C) * x**3
+            + (6 * B + 30 * C) * x**2
+            + (-12 * B - 48 * C) * x
+            + (8 * B + 24 * C)
         ) / 6
         return xp.where(x < 1, inner, xp.where(x < 2, outer, 0.0))
 
@@ -361,7 +368,9 @@ class MitchellFilter(_AbstractTabulatedFilter):
 
 
 class LanczosFilter(_AbstractTabulatedFilter):
-    r"""Lanczos windowed-sinc filter, $f_1(x) \propto \mathrm{sinc}(x)\,\mathrm{sinc}(x/\tau)$ for $|x| < r$.
+    r"""Lanczos windowed-sinc filter, $f_1(x) \propto \mathrm{sinc}(x)\,\mathrm{sinc}(x/\tau)$.
+
+    Zero for $|x| \ge r$.
 
     $\mathrm{sinc}(x) = \sin(\pi x)/(\pi x)$; $\tau = 3$ lobes and $r = \tau$ by default
     (Mitsuba's `lanczos` with `lobes = 3`; pbrt-v4's `LanczosSincFilter` takes $r$ and $\tau$
@@ -374,7 +383,7 @@ class LanczosFilter(_AbstractTabulatedFilter):
     - `radius`: support half-width, > 0; `None` for `tau`. [px]
 
     !!! note "Thesis"
-        Section 2.3.2, eq. 2.35.
+        Thesis section 2.3.2, eq. 2.35.
 
     ??? cite "References"
         `Duchon1979`; `Pharr2023` §8.8.5.

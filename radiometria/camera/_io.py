@@ -33,7 +33,9 @@ def _atomic_write(path, write: Callable[[str], None]) -> Path:
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as e:
-        raise type(e)(e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)) from e
+        raise type(e)(
+            e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)
+        ) from e
     os.close(fd)
     try:
         write(tmp)
@@ -41,7 +43,9 @@ def _atomic_write(path, write: Callable[[str], None]) -> Path:
     except BaseException as e:
         Path(tmp).unlink(missing_ok=True)
         if isinstance(e, OSError):
-            raise type(e)(e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)) from e
+            raise type(e)(
+                e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)
+            ) from e
         if isinstance(e, RuntimeError):  # OpenEXR reports IO failures as RuntimeError
             raise OSError(f"Cannot write image file {str(path)!r}: {e}") from e
         raise
@@ -63,7 +67,9 @@ def _check_metadata(metadata: Mapping | None) -> dict:
     if metadata is None:
         return {}
     if not isinstance(metadata, Mapping):
-        raise TypeError(f"`metadata` must be a mapping of str to values, got {type(metadata).__name__}.")
+        raise TypeError(
+            f"`metadata` must be a mapping of str to values, got {type(metadata).__name__}."
+        )
     out = {}
     for key, value in metadata.items():
         if not isinstance(key, str) or not key:
@@ -79,7 +85,10 @@ def _check_metadata(metadata: Mapping | None) -> dict:
         elif isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
             out[key] = list(value)
         elif isinstance(value, np.ndarray | list | tuple) and np.asarray(value).shape in (
-            (2,), (3,), (3, 3), (4, 4),
+            (2,),
+            (3,),
+            (3, 3),
+            (4, 4),
         ):
             out[key] = np.asarray(value, dtype=np.float32)
         else:
@@ -91,13 +100,14 @@ def _check_metadata(metadata: Mapping | None) -> dict:
     return out
 
 
-def _write_exr_channels(path, channels: dict[str, np.ndarray], header_extra: dict) -> Path:
+def _write_exr_channels(path, channels: dict, header_extra: dict) -> Path:
     import OpenEXR
 
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage, **header_extra}
-
     def write(tmp: str) -> None:
-        OpenEXR.File(header, channels).write(tmp)
+        # OpenEXR.File takes ownership of (and rewrites) the dicts it gets: pass fresh ones.
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+        header.update(header_extra)
+        OpenEXR.File(header, dict(channels)).write(tmp)
 
     return _atomic_write(path, write)
 
@@ -119,7 +129,7 @@ def write_exr(path, rgb, metadata: Mapping | None = None) -> Path:
     The written path. Raises `OSError` naming the path when it cannot be written.
 
     !!! note "Thesis"
-        Section 2.3 (the film's output).
+        Thesis section 2.3 (the film's output).
 
     ??? cite "References"
         `Kainz2004`.
@@ -151,7 +161,8 @@ def _float_channel(path: Path, channels: dict, name: str) -> np.ndarray:
 
     if name not in channels:
         raise ValueError(
-            f"{str(path)!r}: missing channel {name!r} (has: {', '.join(sorted(channels)) or 'none'})."
+            f"{str(path)!r}: missing channel {name!r} "
+            f"(has: {', '.join(sorted(channels)) or 'none'})."
         )
     pixels, ptype = channels[name]
     if ptype == OpenEXR.UINT or np.asarray(pixels).dtype.kind != "f":
@@ -174,7 +185,7 @@ def read_exr(path) -> tuple[np.ndarray, dict]:
     stores one of them as UINT.
 
     !!! note "Thesis"
-        Section 2.3.
+        Thesis section 2.3.
 
     ??? cite "References"
         `Kainz2004`.
@@ -200,7 +211,7 @@ def spectral_channel_name(wavelength_nm: float, stokes: int = 0) -> str:
     The channel name (str).
 
     !!! note "Thesis"
-        Section 2.3.
+        Thesis section 2.3.
 
     ??? cite "References"
         `Fichet2021`.
@@ -236,7 +247,7 @@ def write_spectral_exr(
     The written path.
 
     !!! note "Thesis"
-        Section 2.3.
+        Thesis section 2.3.
 
     ??? cite "References"
         `Fichet2021`.
@@ -277,7 +288,7 @@ def read_spectral_exr(path) -> tuple[np.ndarray, np.ndarray, dict]:
     when it has no `S0.<value>nm` channel or a band is not floating point.
 
     !!! note "Thesis"
-        Section 2.3.
+        Thesis section 2.3.
 
     ??? cite "References"
         `Fichet2021`.
@@ -303,7 +314,9 @@ def _png_chunk(kind: bytes, data: bytes) -> bytes:
 
 def _srgb_encode(x: np.ndarray) -> np.ndarray:
     """IEC 61966-2-1 sRGB encoding (the piecewise inverse EOTF) of linear values in [0, 1]."""
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055)
+    return np.where(
+        x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055
+    )
 
 
 def write_png(path, rgb_linear, exposure: float = 0.0) -> Path:
@@ -324,7 +337,7 @@ def write_png(path, rgb_linear, exposure: float = 0.0) -> Path:
     The written path.
 
     !!! note "Thesis"
-        Section 2.2.2 (sRGB transfer function), section 2.3.
+        Thesis section 2.2.2 (sRGB transfer function), section 2.3.
 
     ??? cite "References"
         `IEC1999`.

@@ -47,7 +47,9 @@ def _check_fov(fov_deg: Array, name: str = "fov_deg") -> Array:
         if v.ndim != 0:
             raise ValueError(f"`{name}` must be a scalar [deg], got shape {v.shape}.")
         if not (0.0 < float(v) < 180.0):
-            raise ValueError(f"`{name}` must lie in the open interval (0, 180) [deg], got {float(v)}.")
+            raise ValueError(
+                f"`{name}` must lie in the open interval (0, 180) [deg], got {float(v)}."
+            )
         return fov_deg
     return eqx.error_if(
         fov_deg, (fov_deg <= 0.0) | (fov_deg >= 180.0), f"`{name}` must lie in (0, 180) [deg]."
@@ -96,7 +98,7 @@ def look_at(origin: ArrayLike, target: ArrayLike, up: ArrayLike) -> Float[Array,
     The 4x4 homogeneous camera-to-world matrix (rigid: rotation plus translation).
 
     !!! note "Thesis"
-        Section 2.3.1 (camera space and world space).
+        Thesis section 2.3.1 (camera space and world space).
 
     ??? cite "References"
         `Jakob2022` (`Transform4f.look_at`); `Pharr2023` §3.9.
@@ -111,7 +113,9 @@ def look_at(origin: ArrayLike, target: ArrayLike, up: ArrayLike) -> Float[Array,
     o, t, u = o.astype(dtype), t.astype(dtype), u.astype(dtype)
     d = t - o
     d_norm = jnp.linalg.norm(d)
-    d_norm = eqx.error_if(d_norm, d_norm <= 0.0, "`target` must differ from `origin` [scene units].")
+    d_norm = eqx.error_if(
+        d_norm, d_norm <= 0.0, "`target` must differ from `origin` [scene units]."
+    )
     d = d / d_norm
     left = jnp.cross(u, d)
     l_norm = jnp.linalg.norm(left)
@@ -128,7 +132,12 @@ def look_at(origin: ArrayLike, target: ArrayLike, up: ArrayLike) -> Float[Array,
 
 
 def perspective_frustum(
-    left: ArrayLike, right: ArrayLike, bottom: ArrayLike, top: ArrayLike, near: ArrayLike, far: ArrayLike
+    left: ArrayLike,
+    right: ArrayLike,
+    bottom: ArrayLike,
+    top: ArrayLike,
+    near: ArrayLike,
+    far: ArrayLike,
 ) -> Float[Array, "4 4"]:
     r"""Perspective projection of a general (possibly off-centre) view frustum, thesis eq. 2.30.
 
@@ -157,8 +166,10 @@ def perspective_frustum(
     ??? cite "References"
         `Pharr2023` §5.2.1; `Ikeuchi2014` (camera models).
     """
-    vals = [as_float_array(v, n) for v, n in zip(
-        (left, right, bottom, top), ("left", "right", "bottom", "top"), strict=True)]
+    vals = [
+        as_float_array(v, n)
+        for v, n in zip((left, right, bottom, top), ("left", "right", "bottom", "top"), strict=True)
+    ]
     n, f = _check_clip(near, far)
     l, r, b, t = vals  # noqa: E741  (the thesis names them l, r, b, t)
     if all(_is_concrete(v) for v in vals):
@@ -199,7 +210,7 @@ def fov_x_deg(fov_deg: ArrayLike, aspect: float, fov_axis: str = "x") -> Float[A
     The horizontal field of view. [deg]
 
     !!! note "Thesis"
-        Section 2.3.1 (film plane and field of view).
+        Thesis section 2.3.1 (film plane and field of view).
 
     ??? cite "References"
         `Jakob2022` (perspective sensor, `fov_axis`).
@@ -276,7 +287,7 @@ class PinholeCamera(eqx.Module):
     - `near_clip`, `far_clip`: clip distances used by `projection_matrix`. [scene units]
 
     !!! note "Thesis"
-        Section 2.3.1, eq. 2.28-2.30.
+        Thesis section 2.3.1, eq. 2.28-2.30.
 
     ??? cite "References"
         `Pharr2023` §5.1-5.2; `Jakob2022` (perspective sensor).
@@ -293,9 +304,13 @@ class PinholeCamera(eqx.Module):
         check_positive_int(self.width, "width")
         check_positive_int(self.height, "height")
         if jnp.shape(self.to_world) != (4, 4):
-            raise ValueError(f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(self.to_world)}.")
+            raise ValueError(
+                f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(self.to_world)}."
+            )
         if jnp.shape(self.fov_x_deg) != ():
-            raise ValueError(f"`fov_x_deg` must be a scalar [deg], got shape {jnp.shape(self.fov_x_deg)}.")
+            raise ValueError(
+                f"`fov_x_deg` must be a scalar [deg], got shape {jnp.shape(self.fov_x_deg)}."
+            )
 
     @classmethod
     def from_to_world(
@@ -326,7 +341,7 @@ class PinholeCamera(eqx.Module):
         A `PinholeCamera`.
 
         !!! note "Thesis"
-            Section 2.3.1.
+            Thesis section 2.3.1.
 
         ??? cite "References"
             `Jakob2022` (perspective sensor).
@@ -366,7 +381,7 @@ class PinholeCamera(eqx.Module):
         A `PinholeCamera` with `to_world = look_at(origin, target, up)`.
 
         !!! note "Thesis"
-            Section 2.3.1.
+            Thesis section 2.3.1.
 
         ??? cite "References"
             `Jakob2022`; `Pharr2023` §3.9.
@@ -387,7 +402,7 @@ class PinholeCamera(eqx.Module):
         return self.width / self.height
 
     def tan_half_fov(self) -> tuple[Array, Array]:
-        """`(tan(fov_x / 2), tan(fov_y / 2))`: half-extents of the image at unit depth. [dimensionless]"""
+        """`(tan(fov_x / 2), tan(fov_y / 2))`: the image's half-extents at unit depth. [-]"""
         tan_x = jnp.tan(jnp.deg2rad(self.fov_x_deg) / 2)
         return tan_x, tan_x / self.aspect
 
@@ -403,11 +418,13 @@ class PinholeCamera(eqx.Module):
             [[-w / 2, 0, 0, w / 2], [0, -h / 2, 0, h / 2], [0, 0, 1, 0], [0, 0, 0, 1]], dtype=dtype
         )
 
-    def generate_ray(self, raster_xy: ArrayLike) -> tuple[Float[Array, "*batch 3"], Float[Array, "*batch 3"]]:
+    def generate_ray(
+        self, raster_xy: ArrayLike
+    ) -> tuple[Float[Array, "*batch 3"], Float[Array, "*batch 3"]]:
         """Method form of `radiometria.camera.generate_ray` (same arguments and result). [px]
 
         !!! note "Thesis"
-            Section 2.3.1.
+            Thesis section 2.3.1.
         """
         return generate_ray(self, raster_xy)
 
@@ -444,7 +461,7 @@ def generate_ray(
     directions, in world space and in the dtype of `raster_xy`. [scene units], [dimensionless]
 
     !!! note "Thesis"
-        Section 2.3.1 (inverse of eq. 2.30 followed by the raster transform).
+        Thesis section 2.3.1 (inverse of eq. 2.30 followed by the raster transform).
 
     ??? cite "References"
         `Pharr2023` §5.2.2; `Jakob2022`.
@@ -491,7 +508,11 @@ def project(camera: PinholeCamera, points_world: ArrayLike) -> Float[Array, "*ba
     p = check_last_axis(as_float_array(points_world, "points_world"), "points_world", 3)
     dtype = p.dtype
     world_to_camera = jnp.linalg.inv(camera.to_world.astype(dtype))
-    m = camera.raster_from_ndc().astype(dtype) @ camera.projection_matrix().astype(dtype) @ world_to_camera
+    m = (
+        camera.raster_from_ndc().astype(dtype)
+        @ camera.projection_matrix().astype(dtype)
+        @ world_to_camera
+    )
     ph = jnp.concatenate([p, jnp.ones_like(p[..., :1])], axis=-1)
     clip = jnp.einsum("ij,...j->...i", m, ph)
     w = clip[..., 3]

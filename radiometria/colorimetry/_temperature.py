@@ -13,6 +13,7 @@ $c_2/(\lambda T)$, a different $c_2$ is the same locus at the rescaled temperatu
 $T\,c_{2,\mathrm{SI}}/c_2$; the two conventions differ by 1.55e-5 relative (0.1 K at 6504 K).
 """
 
+import concurrent.futures
 import functools
 
 import jax
@@ -136,19 +137,33 @@ def planckian_table(observer: str = DEFAULT_OBSERVER, c2: float | None = None) -
     """The Ohno (2013) Planckian table (m, 3) of rows (T [K], u, v), float64 NumPy.
 
     Built once per (observer, c2) on first use (not at import, so importing starts no device),
-    with `planckian_locus_uv` evaluated in float64 whatever the JAX precision setting.
+    with `planckian_locus_uv` evaluated eagerly in float64 whatever the JAX precision setting.
+    The evaluation runs in a worker thread: JAX's tracing state and the x64 switch are
+    thread-local, so the table is concrete even when first needed inside `jax.jit`.
     """
     T = _ohno_temperatures(CCT_MINIMAL_OHNO2013, CCT_MAXIMAL_OHNO2013, CCT_SPACING_OHNO2013)
-    with jax.ensure_compile_time_eval(), jax.enable_x64(True):
-        uv = np.asarray(planckian_locus_uv(jnp.asarray(T, dtype=jnp.float64), observer, c2=c2))
-    return np.concatenate([T[:, None], uv.astype(np.float64)], axis=1)
+
+    def build() -> np.ndarray:
+        with jax.enable_x64(True):
+            uv = planckian_locus_uv(jnp.asarray(T, dtype=jnp.float64), observer, c2=c2)
+            return np.asarray(uv, dtype=np.float64)
+
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
+        uv = pool.submit(build).result()
+    table = np.concatenate([T[:, None], uv], axis=1)
+    table.setflags(write=False)
+    return table
 
 
 def _uv_to_CCT_ohno2013(uv: Array, observer: str, c2) -> Array:
     table_np = planckian_table(resolve_observer(observer, allow_rgb=False), c2)
-    dtype = uv.dtype
-    table = jnp.asarray(table_np, dtype=dtype)
-    m = table_np.shape[0]
+    return _ohno2013_core(uv, jnp.asarray(table_np, dtype=uv.dtype))
+
+
+@jax.jit
+def _ohno2013_core(uv: Array, table: Array) -> Array:
+    # One compiled kernel: eager dispatch of its ~60 small ops would compile each separately.
+    m = table.shape[0]
     K = _COARSE_STRIDE
     coarse = table[::K]  # (mc, 3)
     batch = uv.shape[:-1]
@@ -201,6 +216,7 @@ def _uv_to_CCT_ohno2013(uv: Array, observer: str, c2) -> Array:
     return out.reshape(batch + (2,))
 
 
+@jax.jit
 def _uv_to_CCT_robertson1968(uv: Array) -> Array:
     dtype = uv.dtype
     r_itl, u_itl, v_itl, t_itl = (jnp.asarray(c, dtype=dtype) for c in ROBERTSON1968.T)

@@ -1,3 +1,151 @@
-"""Figures for `radiometria.colorimetry`."""
+"""Figures for `radiometria.colorimetry` (thesis section 2.2): CMFs and the xy diagram."""
 
-from ._registry import figure, save  # noqa: F401
+import numpy as np
+
+from ._registry import figure, save
+
+
+@figure("fig_2_1_cmfs")
+def fig_2_1_cmfs(out_dir, *, smoke: bool = False):
+    """CIE 1931 RGB (Wright & Guild) and XYZ colour-matching functions (thesis fig. 2.1)."""
+    import matplotlib.pyplot as plt
+
+    from ..colorimetry import get_cmfs
+
+    rgb = get_cmfs("Wright & Guild 1931 2 Degree RGB CMFs")
+    xyz = get_cmfs("CIE 1931 2 Degree Standard Observer")
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(10.0, 3.8))
+    wl = np.asarray(rgb.wavelengths_nm)
+    for k, (c, lab) in enumerate(zip("rgb", [r"$\bar r$", r"$\bar g$", r"$\bar b$"], strict=True)):
+        ax0.plot(wl, np.asarray(rgb.values)[:, k], color=c, label=lab)
+    ax0.axhline(0.0, color="k", lw=0.6)
+    for p in (435.8, 546.1, 700.0):  # the CIE 1931 RGB primaries (thesis section 2.2)
+        ax0.axvline(p, color="0.6", ls=":", lw=0.8)
+    ax0.set_title("CIE 1931 RGB colour-matching functions")
+    ax0.set_xlabel("wavelength [nm]")
+    ax0.set_ylabel("tristimulus value")
+    ax0.legend()
+    wl = np.asarray(xyz.wavelengths_nm)
+    for k, (c, lab) in enumerate(
+        zip(
+            ["tab:red", "tab:green", "tab:blue"],
+            [r"$\bar x$", r"$\bar y$", r"$\bar z$"],
+            strict=True,
+        )
+    ):
+        ax1.plot(wl, np.asarray(xyz.values)[:, k], color=c, label=lab)
+    ax1.set_xlim(360, 830)
+    ax1.set_title("CIE 1931 XYZ colour-matching functions (2°)")
+    ax1.set_xlabel("wavelength [nm]")
+    ax1.legend()
+    for ax in (ax0, ax1):
+        ax.grid(True, alpha=0.3)
+    return save(fig, out_dir, "fig_2_1_cmfs")
+
+
+def _spectral_locus_xy() -> np.ndarray:
+    from ..colorimetry import get_cmfs
+
+    v = np.asarray(get_cmfs().values)[:421]  # 360-780 nm; beyond, the locus folds back on itself
+    return v[:, :2] / v.sum(axis=1, keepdims=True)
+
+
+def _horseshoe_image(locus: np.ndarray, n: int) -> np.ndarray:
+    """RGBA image of the xy diagram filled with (normalised, gamut-clipped) sRGB colours."""
+    from matplotlib.path import Path as MplPath
+
+    from ..colorimetry import XYZ_to_sRGB, xy_to_XYZ
+
+    x = np.linspace(0.0, 0.8, n)
+    y = np.linspace(0.0, 0.9, n)
+    X, Y = np.meshgrid(x, y)
+    xy = np.stack([X.ravel(), Y.ravel()], axis=-1)
+    inside = MplPath(np.vstack([locus, locus[:1]])).contains_points(xy)
+    xy_in = np.where(inside[:, None], xy, 1.0 / 3.0)  # avoid y = 0 outside the locus
+    rgb_lin = np.asarray(XYZ_to_sRGB(np.asarray(xy_to_XYZ(xy_in))))  # encoded; clip below
+    # Scale each colour so its largest linear component is 1, then encode again.
+    from ..colorimetry import srgb_eotf, srgb_eotf_inverse
+
+    lin = np.asarray(srgb_eotf(rgb_lin))
+    lin = np.clip(lin, 0.0, None)
+    lin = lin / np.maximum(lin.max(axis=-1, keepdims=True), 1e-12)
+    rgb = np.clip(np.asarray(srgb_eotf_inverse(lin)), 0.0, 1.0)
+    rgba = np.concatenate([rgb, inside[:, None].astype(float)], axis=-1)
+    return rgba.reshape(n, n, 4)
+
+
+@figure("fig_2_2_chromaticity")
+def fig_2_2_chromaticity(out_dir, *, smoke: bool = False):
+    """CIE 1931 xy chromaticity diagram: spectral locus, Planckian locus with isotemperature
+    lines, the sRGB / Display P3 / Rec.2020 gamuts and the illuminants of thesis table 2.1
+    (thesis fig. 2.2 and 2.3)."""
+    import matplotlib.pyplot as plt
+
+    from ..colorimetry import (
+        RGB_COLOURSPACES,
+        CCT_to_uv,
+        CCT_to_xy,
+        UCS_uv_to_xy,
+        XYZ_to_xy,
+        get_illuminant,
+        sd_to_XYZ,
+    )
+
+    locus = _spectral_locus_xy()
+    fig, ax = plt.subplots(figsize=(6.6, 7.0))
+    img = _horseshoe_image(locus, 120 if smoke else 500)
+    ax.imshow(img, origin="lower", extent=(0.0, 0.8, 0.0, 0.9), interpolation="bilinear", zorder=0)
+    ax.plot(*np.vstack([locus, locus[:1]]).T, color="k", lw=1.2, zorder=2)
+    for wl in (460, 480, 490, 500, 510, 520, 540, 560, 580, 600, 620, 700):
+        x, y = locus[wl - 360]
+        ax.plot(x, y, "k.", ms=3, zorder=3)
+        ax.annotate(
+            f"{wl}",
+            (x, y),
+            textcoords="offset points",
+            xytext=(6, 0) if x > 0.2 else (-22, 0),
+            fontsize=7,
+        )
+
+    # Planckian locus, 1000 K to 100000 K (approaching the infinite-temperature point).
+    T = np.geomspace(1000.0, 100000.0, 60 if smoke else 300)
+    pl = np.asarray(CCT_to_xy(T))
+    ax.plot(pl[:, 0], pl[:, 1], color="k", lw=1.6, zorder=4, label="Planckian locus")
+    # Isotemperature lines: constant CCT, Duv in [-0.02, 0.02] (normals in CIE 1960 uv).
+    for t in (1500.0, 2000.0, 3000.0, 4000.0, 6500.0, 10000.0):
+        duv = np.linspace(-0.02, 0.02, 11)
+        line = np.asarray(UCS_uv_to_xy(CCT_to_uv(np.full_like(duv, t), duv)))
+        ax.plot(line[:, 0], line[:, 1], color="k", lw=0.7, zorder=4)
+        ax.annotate(f"{t:.0f} K", line[0], fontsize=6, textcoords="offset points", xytext=(-8, -9))
+
+    styles = {"sRGB": "w-", "Display P3": "w--", "ITU-R BT.2020": "w:"}
+    for name, style in styles.items():
+        p = np.asarray(RGB_COLOURSPACES[name].primaries)
+        tri = np.vstack([p, p[:1]])
+        ax.plot(tri[:, 0], tri[:, 1], style, lw=1.4, zorder=5)
+        ax.plot(tri[:, 0], tri[:, 1], "k" + style[1:], lw=0.6, zorder=5, label=name)
+
+    # Illuminants of thesis table 2.1, from their tabulated SPDs (emissive XYZ, 2° observer).
+    for name, offset in [
+        ("A", (5, 4)),
+        ("D50", (5, 3)),
+        ("E", (4, -11)),
+        ("D55", (6, -4)),
+        ("D65", (-27, 2)),
+    ]:
+        s = get_illuminant(name)
+        wl, v = np.asarray(s.wavelengths_nm), np.asarray(s.values)
+        keep = wl >= 360.0
+        xy = np.asarray(XYZ_to_xy(sd_to_XYZ(v[keep], wl[keep])))
+        ax.plot(*xy, "o", mfc="w", mec="k", ms=4, zorder=6)
+        ax.annotate(name, xy, textcoords="offset points", xytext=offset, fontsize=8, zorder=6)
+
+    ax.set_xlim(0.0, 0.8)
+    ax.set_ylim(0.0, 0.9)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_title("CIE 1931 xy chromaticity diagram")
+    ax.grid(True, alpha=0.25)
+    ax.legend(loc="upper right", fontsize=8, facecolor="0.85")
+    return save(fig, out_dir, "fig_2_2_chromaticity")

@@ -20,11 +20,37 @@ from ._distributions import (
     PiecewiseConstant2D as PiecewiseConstant2D,
     sample_discrete as sample_discrete,
 )
+from ._estimators import (
+    ConvergenceStudy as ConvergenceStudy,
+    Estimate as Estimate,
+    antithetic as antithetic,
+    control_variate as control_variate,
+    convergence_study as convergence_study,
+    estimate_mean as estimate_mean,
+    filter_importance_sampling as filter_importance_sampling,
+    importance_sampling as importance_sampling,
+    integrate as integrate,
+    mis_estimate as mis_estimate,
+    one_sample_mis as one_sample_mis,
+    roulette_and_split as roulette_and_split,
+    russian_roulette as russian_roulette,
+    stratified_estimate as stratified_estimate,
+    weighted_importance_sampling as weighted_importance_sampling,
+)
+from ._halton import halton as halton
 from ._heuristics import (
     balance_heuristic as balance_heuristic,
     mis_weights as mis_weights,
     power_heuristic as power_heuristic,
 )
+from ._samplers import (
+    independent as independent,
+    kronecker as kronecker,
+    latin_hypercube as latin_hypercube,
+    rank1_lattice as rank1_lattice,
+    stratified as stratified,
+)
+from ._sobol import sobol as sobol
 from ._warps import (
     VISIBLE_MAX_NM as VISIBLE_MAX_NM,
     VISIBLE_MIN_NM as VISIBLE_MIN_NM,
@@ -65,12 +91,4 @@ from ._warps import (
     uniform_triangle_pdf as uniform_triangle_pdf,
     visible_wavelengths_pdf as visible_wavelengths_pdf,
 )
-from ._sobol import sobol as sobol
-from ._halton import halton as halton
-from ._samplers import (
-    independent as independent,
-    kronecker as kronecker,
-    latin_hypercube as latin_hypercube,
-    rank1_lattice as rank1_lattice,
-    stratified as stratified,
-)
+from ._genz import GENZ_FAMILIES as GENZ_FAMILIES, genz as genz

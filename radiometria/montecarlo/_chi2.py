@@ -89,14 +89,20 @@ def _to_coords(domain: str, samples: np.ndarray, n: int) -> tuple[np.ndarray, np
     if domain == "interval":
         s = samples.reshape(n, -1)
         if s.shape[1] != 1:
-            raise ValueError(f"domain 'interval' needs samples of shape (n,) or (n, 1), got {samples.shape}.")
+            raise ValueError(
+                f"domain 'interval' needs samples of shape (n,) or (n, 1), got {samples.shape}."
+            )
         return s, np.all(np.isfinite(s), axis=1)
     if domain == "square":
         if samples.shape != (n, 2):
-            raise ValueError(f"domain 'square' needs samples of shape ({n}, 2), got {samples.shape}.")
+            raise ValueError(
+                f"domain 'square' needs samples of shape ({n}, 2), got {samples.shape}."
+            )
         return samples, np.all(np.isfinite(samples), axis=1)
     if samples.shape != (n, 3):
-        raise ValueError(f"domain 'sphere' needs unit vectors of shape ({n}, 3), got {samples.shape}.")
+        raise ValueError(
+            f"domain 'sphere' needs unit vectors of shape ({n}, 3), got {samples.shape}."
+        )
     norm = np.linalg.norm(samples, axis=1)
     valid = np.all(np.isfinite(samples), axis=1) & (np.abs(norm - 1.0) < 1e-3)
     w = samples / np.where(norm > 0, norm, 1.0)[:, None]
@@ -233,7 +239,9 @@ def chi2_test(
     else:
         bnds = (tuple(bounds),) if domain == "interval" else tuple(tuple(b) for b in bounds)
         if len(bnds) != k or any(len(b) != 2 or not b[1] > b[0] for b in bnds):
-            raise ValueError(f"`bounds` for domain {domain!r} must be {k} pairs (lo < hi), got {bounds!r}.")
+            raise ValueError(
+                f"`bounds` for domain {domain!r} must be {k} pairs (lo < hi), got {bounds!r}."
+            )
 
     dtype = jnp.result_type(float)
     if u_dim is not None:

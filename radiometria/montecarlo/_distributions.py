@@ -18,7 +18,7 @@ from .._types import Float, FloatLike, Int
 
 
 def _check_table(f: Array, name: str) -> Array:
-    """Reject negative, non-finite or all-zero tables; statically when concrete, else at run time."""
+    """Reject negative, non-finite or all-zero tables: at once if concrete, else at run time."""
     if not isinstance(f, jax.core.Tracer):
         a = np.asarray(f)
         if not np.all(np.isfinite(a)):
@@ -251,7 +251,9 @@ class PiecewiseConstant2D(eqx.Module):
         """Integral of the tabulated function over the domain. [unit of values x area]"""
         return self.marginal.integral
 
-    def sample(self, u: FloatLike) -> tuple[Float[Array, "*batch 2"], Array, Int[Array, "*batch 2"]]:
+    def sample(
+        self, u: FloatLike
+    ) -> tuple[Float[Array, "*batch 2"], Array, Int[Array, "*batch 2"]]:
         """Sample a point by the marginal-then-conditional inversion.
 
         **Arguments:**

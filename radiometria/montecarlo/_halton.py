@@ -113,9 +113,7 @@ def _halton_plain(start: Array, n: int, d: int, n_digits: int, dtype) -> Array:
     bases = first_primes(d)
     b = jnp.asarray(bases.astype(np.uint32))[None, :]
     bf = jnp.asarray(bases.astype(np.float64)).astype(dtype)[None, :]
-    q = jnp.broadcast_to(
-        (start + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d)
-    )
+    q = jnp.broadcast_to((start + jnp.arange(n, dtype=jnp.uint32))[:, None], (n, d))
     seq = jnp.zeros((n, d), dtype)
     b2r = jnp.ones((1, d), dtype) / bf
     # SciPy's loop: seq += (i mod b) / b^k, most significant power last, same rounding order.
@@ -128,11 +126,17 @@ def _halton_plain(start: Array, n: int, d: int, n_digits: int, dtype) -> Array:
 
 
 def _permutation_tables(key: Key, bases: np.ndarray, n_digits: np.ndarray) -> Array:
-    """Random permutations (d, K, max_b) of {0..b_j-1} per dimension j and digit position."""
+    """Pseudo-random permutations (d, K, max_b) of {0..b_j-1} per dimension j and digit position.
+
+    Kensler's hashed permutations seeded from `key`: one seed per (dimension, digit position).
+    """
     d, k_max, b_max = len(bases), int(n_digits.max()), int(bases.max())
-    r = jax.random.uniform(key, (d, k_max, b_max))
-    valid = np.arange(b_max)[None, None, :] < bases[:, None, None]
-    return jnp.argsort(jnp.where(valid, r, 2.0), axis=-1).astype(jnp.int32)
+    seeds = jax.random.bits(key, (d, k_max, 1), jnp.uint32)
+    i = jnp.arange(b_max, dtype=jnp.uint32)[None, None, :]
+    b = jnp.asarray(bases.astype(np.uint32))[:, None, None]
+    valid = i < b
+    perm = permutation_element(jnp.where(valid, i, 0), b, seeds)
+    return jnp.where(valid, perm, 0).astype(jnp.int32)
 
 
 def _split(bases: np.ndarray, skip: int, n: int):
@@ -238,7 +242,8 @@ def halton(
     **Arguments:**
 
     - `n`: number of points. [dimensionless]
-    - `d`: dimension >= 1 (no upper limit; high dimensions of plain Halton are poor). [dimensionless]
+    - `d`: dimension >= 1 (no upper limit; plain Halton is poor in high dimensions).
+        [dimensionless]
     - `scramble`: `None` (or `"none"`), `"permutation"` (random digit permutations, Owen 2017,
       as SciPy's `scramble=True`) or `"owen"` (nested uniform scrambling with hashed
       permutations, pbrt-v4's `OwenScrambledRadicalInverse`).
@@ -258,12 +263,15 @@ def halton(
     skip = check_positive_int(skip, "skip", minimum=0)
     if skip + n > 2**32:
         raise ValueError(f"`skip + n` = {skip + n} exceeds 2^32 points.")
-    check_choice(scramble, "scramble", SCRAMBLES)
+    if scramble is not None:
+        check_choice(scramble, "scramble", [s for s in SCRAMBLES if s is not None])
     scramble = None if scramble == "none" else scramble
     if scramble is not None and key is None:
         raise ValueError(f"scramble={scramble!r} needs a `key`.")
     if scramble is None and key is not None:
-        raise ValueError("A `key` was given but `scramble` is None; pass scramble='owen' (or another).")
+        raise ValueError(
+            "A `key` was given but `scramble` is None; pass scramble='owen' (or another)."
+        )
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
     if not jnp.issubdtype(dtype, jnp.floating):
         raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")

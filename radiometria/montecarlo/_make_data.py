@@ -13,8 +13,9 @@ The packaged file `data/sobol_joe_kuo_6_21201.npz` keeps exactly the information
 text file, compactly: `s` (uint8, degree), `a` (uint32, polynomial coefficients) and `m_bits`
 (uint8, `np.packbits` of the initial direction integers of all dimensions in order, `m_k` written
 with its k bits, most significant first, since `m_k` is odd and `< 2^k`). Dimension 1 is the
-van der Corput sequence (`s = 0`). `radiometria.montecarlo._sobol` unpacks them. `provenance.json` records the source, the licence and the
-sha256 of both the SciPy file read and the file written.
+van der Corput sequence (`s = 0`). `radiometria.montecarlo._sobol` unpacks them.
+`provenance.json` records the source, the licence and the sha256 of both the SciPy file read
+and the file written.
 
 Run `python -m radiometria.montecarlo._make_data` (SciPy installed) to rebuild;
 `tests/montecarlo/test_sobol.py` checks the packaged table against SciPy's file.
@@ -103,7 +104,9 @@ def _write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
             info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
             info.compress_type = zipfile.ZIP_DEFLATED
             arr_buf = io.BytesIO()
-            np.lib.format.write_array(arr_buf, np.ascontiguousarray(arrays[name]), allow_pickle=False)
+            np.lib.format.write_array(
+                arr_buf, np.ascontiguousarray(arrays[name]), allow_pickle=False
+            )
             zf.writestr(info, arr_buf.getvalue())
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}-")
     try:

@@ -229,12 +229,15 @@ def sobol(
             f"`n` = {n} is not a power of two, so the Sobol points are not balanced; use "
             f"n = {1 << (n - 1).bit_length()} or pass `allow_unbalanced=True`."
         )
-    check_choice(scramble, "scramble", SCRAMBLES)
+    if scramble is not None:
+        check_choice(scramble, "scramble", [s for s in SCRAMBLES if s is not None])
     scramble = None if scramble == "none" else scramble
     if scramble is not None and key is None:
         raise ValueError(f"scramble={scramble!r} needs a `key`.")
     if scramble is None and key is not None:
-        raise ValueError("A `key` was given but `scramble` is None; pass scramble='owen' (or another).")
+        raise ValueError(
+            "A `key` was given but `scramble` is None; pass scramble='owen' (or another)."
+        )
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
     if not jnp.issubdtype(dtype, jnp.floating):
         raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")

@@ -80,7 +80,7 @@ def luminous_efficiency_table(
         Thesis section 2.1 ($V_p(\\lambda)$ and $V_s(\\lambda)$).
 
     ??? cite "References"
-        `CIE2019` (CIE 018:2019); `CVRL` (the tables, via colour-science).
+        `CIE2019` (CIE 018:2019); `CVRL2014` (the tables, via colour-science).
     """
     wavelengths, values = _check_vision(vision)
     return jnp.asarray(wavelengths, dtype=float), jnp.asarray(values, dtype=float)
@@ -119,7 +119,7 @@ def luminous_efficiency_function(
         Thesis section 2.1 ($V_p(\lambda)$ and $V_s(\lambda)$).
 
     ??? cite "References"
-        `CIE2019` (CIE 018:2019); `CVRL`.
+        `CIE2019` (CIE 018:2019); `CVRL2014`.
     """
     _check_vision(vision)
     return _efficiency_on(as_float_array(wavelength_nm, "wavelength_nm"), vision)

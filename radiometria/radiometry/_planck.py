@@ -70,8 +70,10 @@ def _prefactor_over_expm1(prefactor: Array, log_prefactor: Array, x: Array) -> A
     `log_prefactor` must equal `log(prefactor)`; it is used where `exp(x)` could overflow.
     """
     small = x <= _X_SWITCH
-    x_small = jnp.minimum(x, _X_SWITCH)  # the direct branch never sees a large x ...
-    x_large = jnp.maximum(x, _X_SWITCH)  # ... and the logarithmic branch never a small one
+    # The direct branch never sees a large x, the logarithmic one never a small x. (`where`,
+    # not `minimum`/`maximum`: those pass half the gradient each way at a tie, x = 20.)
+    x_small = jnp.where(small, x, _X_SWITCH)
+    x_large = jnp.where(small, _X_SWITCH, x)
     direct = prefactor / jnp.expm1(x_small)
     # 1 / (e^x - 1) = e^-x / (1 - e^-x); the numerator is formed in log space so that a huge
     # prefactor times a tiny e^-x does not underflow early (or overflow) in float32.

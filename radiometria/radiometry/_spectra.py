@@ -110,12 +110,14 @@ def _interpolation_weights(grid: Array, x: Array, extrapolation: str):
     NaN in `x` gives a NaN weight (and is never "outside"), so it propagates.
     """
     n = grid.shape[0]
-    x_in = jnp.clip(x, grid[0], grid[-1])
+    below, above = x < grid[0], x > grid[-1]
+    # Clamp with `where`, not `clip`: at x == an end sample `clip` passes half the gradient.
+    x_in = jnp.where(below, grid[0], jnp.where(above, grid[-1], x))
     i1 = jnp.clip(jnp.searchsorted(grid, x_in, side="right"), 1, n - 1)
     i0 = i1 - 1
     g0, g1 = grid[i0], grid[i1]
     t = (x_in - g0) / (g1 - g0)
-    outside = (x < grid[0]) | (x > grid[-1]) if extrapolation == "zero" else None
+    outside = below | above if extrapolation == "zero" else None
     return i0, i1, t, outside
 
 

@@ -1,32 +1,35 @@
 r"""The render driver: batches of camera paths, spread over devices, into a film.
 
-`render` estimates, for every pixel, the filtered spectral radiance of thesis eq. 2.35 and
+`render` estimates the filtered spectral radiance of every pixel (thesis section 2.3.2) and
 converts it to linear sRGB:
 
 1. **Work layout.** The image's $P = W H$ pixels are cut into tiles of `t` pixels; one *step*
-   renders `k` samples (passes) of every pixel of one tile, `n = t k` paths at once, so memory
-   stays bounded by the batch, never by $W H \cdot \mathrm{spp}$. The estimate of the bytes a
-   batch and the film need is checked before anything is allocated.
-2. **Samples.** Pixel `p`, pass `s` draws its variates from `pixel_samples` (independent or
-   padded Owen-scrambled Sobol), which depend only on `(seed, s, p)`: the image does not
-   depend on the batch layout or on the number of devices. Filter importance sampling puts the
-   film position at the pixel centre plus an offset drawn from the reconstruction filter, with
-   weight $w = f/p$ (thesis eq. 2.35); four hero wavelengths (`sample_hero_wavelengths`).
-3. **Integrator.** `path_radiance` (or `direct_radiance`) gives $L(\lambda_i)$.
-4. **Film.** Each path contributes $w \cdot \frac{1}{4}\sum_i L(\lambda_i)\,\bar{\mathbf{x}}(\lambda_i)
-   / p(\lambda_i) / \int \bar y$ to its pixel's XYZ sum and $w$ to its weight sum (CIE 1931 2°
-   observer; a radiance of the D65 white with $Y = 1$ gives XYZ of the D65 white point, as in
-   Mitsuba and PBRT). The sums are accumulated on the host in float64; at the end
-   $\mathrm{XYZ} = \sum w\,\mathrm{xyz} / \sum w$ becomes linear sRGB (D65).
+   traces `k` samples (passes) of every pixel of one tile, `n = t k` paths at once, so memory
+   is bounded by the batch, never by $W H \cdot \mathrm{spp}$. The film's memory is checked
+   against the available memory before anything is allocated.
+2. **Samples.** Pass `s` of pixel `p` draws its variates from `pixel_samples` (independent or
+   padded Owen-scrambled Sobol); they depend only on `(seed, s, p)`, so the image depends
+   neither on the batching nor on the number of devices. The film position is uniform in the
+   pixel (splatting) or the pixel centre plus an offset drawn from the filter (filter
+   importance sampling); four hero wavelengths come from `sample_hero_wavelengths`.
+3. **Integrator.** `path_radiance` gives $L(\lambda_i)$ (`"direct"` is its two-segment case).
+4. **Film.** `radiometria.camera.film_samples_to_XYZ` turns the four radiances into one XYZ
+   estimate, $\frac14\sum_i L(\lambda_i)\bar{\mathbf{x}}(\lambda_i)/p(\lambda_i)/\int\bar y$
+   (a constant spectrum $L$ gives $Y = L$; the D65 white of $Y = 1$ gives linear sRGB
+   (1, 1, 1), as in Mitsuba and PBRT). Samples are splatted into every pixel within the filter
+   radius with weight $f$ (eq. 2.34, Mitsuba's `hdrfilm`) or added to their own pixel with
+   weight $f/p$ (eq. 2.35, pbrt-v4); the film divides the weighted sums at the end
+   (`film_develop`) and converts XYZ to linear sRGB (D65).
 
 **Devices.** The pixel axis of every step is sharded over a 1-D mesh of the local devices
-(`jax.shard_map`): each device traces its share of the tile and no data moves between devices
-during a step. On several hosts (`jax.distributed.initialize()` first, on every host), process
-`i` of `m` renders the steps `i, i + m, i + 2m, ...` on its own devices, and the films are
-summed across processes with `jax.experimental.multihost_utils.process_allgather` at the end,
-so every process returns the whole image. A render is deterministic for a seed on any number
-of devices or hosts (up to float rounding of the per-step sums, which is identical for the
-same `batch`).
+(`jax.shard_map`): each device traces its share of the tile, with no communication; the
+samples are then added into the film's accumulators (a gather across the devices). On several
+hosts (call `jax.distributed.initialize()` first on every host), process `i` of `m` renders
+the steps `i, i + m, i + 2m, ...` on its own devices, and the films' sums are added across
+processes with `jax.experimental.multihost_utils.process_allgather`, so every process returns
+the whole image. For a given seed and batch size the image is the same on any number of
+devices or hosts (on GPUs, splatting's scatter-add uses atomics, so the last bits may vary
+unless XLA's deterministic ops are enabled).
 """
 
 import functools
@@ -46,11 +49,12 @@ from ._render_scene import RenderScene
 from ._samplers import SAMPLERS, pixel_samples
 from ._spectral import sample_hero_wavelengths
 
-__all__ = ["INTEGRATORS", "estimate_render_memory", "render"]
+__all__ = ["INTEGRATORS", "RECONSTRUCTIONS", "estimate_render_memory", "render"]
 
 
 INTEGRATORS = ("path", "direct")
-CAMERA_DIMENSIONS = 4  # [filter x, filter y, wavelength, unused]: keeps bounce pairs aligned
+RECONSTRUCTIONS = ("splat", "importance")
+CAMERA_DIMENSIONS = 4  # [film x, film y, wavelength, unused]: keeps the bounce pairs aligned
 _MAX_PIXELS = 2**31 - 2**20  # pixel indices are int32
 _FILM_BYTES_PER_PIXEL = 4 * 4 * 3  # float32 sums (H, W, 4), the developed image, a host copy
 
@@ -112,24 +116,48 @@ class _Kernel(eqx.Module):
     cmfs: Film  # a 1 x 1 film: only its colour-matching functions are used here
 
 
-def _paths_xyz(kernel: _Kernel, key, pass_start, pixel, *, plan: _Plan, spp, width, max_depth,
-               rr_depth, integrator, sampler):
-    """Per pixel of one device's share of a tile: `(t, 4)` = [sum w X, sum w Y, sum w Z, sum w]
-    over the step's passes."""
+@dataclass(frozen=True)
+class _Config:
+    """The static configuration of a render: it fixes the compiled step."""
+
+    plan: _Plan
+    spp: int
+    width: int
+    max_depth: int
+    rr_depth: int
+    sampler: str
+    reconstruction: str
+    devices: tuple
+
+    @property
+    def n_dims(self) -> int:
+        return CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * (self.max_depth - 1)
+
+
+def _trace(kernel: _Kernel, key, pass_start, pixel, *, cfg: _Config):
+    """Trace the step's paths of (a device's share of) a tile of pixels.
+
+    Returns `(raster_xy (n, 2), xyz (n, 3), weight (n,))` for the `n = t k` samples, pixel-major
+    (the `k` passes of a pixel are consecutive); invalid samples have weight 0 and XYZ 0.
+    """
     dtype = jnp.float32
-    n_dims = CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * (max_depth - 1)
-    t = pixel.shape[0]
-    k = plan.passes
+    t, k = pixel.shape[0], cfg.plan.passes
     passes = pass_start + jnp.arange(k, dtype=jnp.int32)
-    valid_pixel = pixel < plan.n_pixels
+    valid_pixel = pixel < cfg.plan.n_pixels
     pix = jnp.where(valid_pixel, pixel, 0)
-    u = pixel_samples(key, sampler, passes, pix, n_dims, spp=spp, dtype=dtype)  # (t, k, d)
-    u = u.reshape(t * k, n_dims)
-    px = jnp.repeat((pix % width).astype(dtype), k)
-    py = jnp.repeat((pix // width).astype(dtype), k)
-    offset, weight = kernel.rfilter.sample(u[:, 0:2])
-    raster = jnp.stack([px + 0.5 + offset[:, 0], py + 0.5 + offset[:, 1]], axis=-1)
-    origins, directions = kernel.camera.generate_ray(raster.astype(dtype))
+    u = pixel_samples(key, cfg.sampler, passes, pix, cfg.n_dims, spp=cfg.spp, dtype=dtype)
+    u = u.reshape(t * k, cfg.n_dims)
+    corner = jnp.stack([pix % cfg.width, pix // cfg.width], axis=-1).astype(dtype)
+    corner = jnp.repeat(corner, k, axis=0)
+    if cfg.reconstruction == "importance":
+        # Filter importance sampling (thesis eq. 2.35): offset ~ |f|, weight f / p.
+        offset, weight = kernel.rfilter.sample(u[:, 0:2])
+        raster = corner + 0.5 + offset.astype(dtype)
+    else:
+        # Splatting (eq. 2.34): uniform positions in the pixel, filter weights at splat time.
+        raster = corner + u[:, 0:2]
+        weight = jnp.ones((t * k,), dtype)
+    origins, directions = kernel.camera.generate_ray(raster)
     wavelength_nm, pdf = sample_hero_wavelengths(u[:, 2])
     radiance = path_radiance(
         kernel.scene,
@@ -137,16 +165,13 @@ def _paths_xyz(kernel: _Kernel, key, pass_start, pixel, *, plan: _Plan, spp, wid
         directions.astype(dtype),
         wavelength_nm.astype(dtype),
         u[:, CAMERA_DIMENSIONS:],
-        max_depth=max_depth,
-        rr_depth=rr_depth if integrator == "path" else max_depth,
+        max_depth=cfg.max_depth,
+        rr_depth=cfg.rr_depth,
     )
     xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
-    ok = jnp.repeat(valid_pixel, k) & (jnp.tile(passes, t) < spp)
+    ok = jnp.repeat(valid_pixel, k) & (jnp.tile(passes, t) < cfg.spp)
     ok = ok & jnp.all(jnp.isfinite(xyz), axis=-1)
-    w = jnp.where(ok, weight.astype(dtype), 0.0)
-    contrib = jnp.concatenate([xyz * w[:, None], w[:, None]], axis=-1)
-    contrib = jnp.where(ok[:, None], contrib, 0.0)
-    return contrib.reshape(t, k, 4).sum(axis=1)
+    return raster, jnp.where(ok[:, None], xyz, 0.0), jnp.where(ok, weight.astype(dtype), 0.0)
 
 
 def render(
@@ -165,6 +190,7 @@ def render(
     camera=None,
     rfilter=None,
     rr_depth: int = 5,
+    reconstruction: str = "splat",
     return_xyz: bool = False,
 ):
     r"""Render a scene spectrally into a linear sRGB image (thesis ch. 8-9; eq. 2.35).
@@ -188,6 +214,13 @@ def render(
     - `camera`, `rfilter`: a `radiometria.camera.PinholeCamera` and reconstruction filter, for
         a `RenderScene` (default filter: Gaussian, stddev 0.5 px, radius 2 px).
     - `rr_depth`: path segments before Russian roulette starts (Mitsuba's `rr_depth`, 5).
+    - `reconstruction`: how samples become pixels (thesis 2.3.2): `"splat"` (default; samples
+        uniform in their pixel, each added to every pixel within the filter radius with weight
+        $f$, eq. 2.34, as Mitsuba's `hdrfilm`) or `"importance"` (filter importance sampling:
+        offsets drawn from the filter, each sample in its own pixel with weight $f/p$, eq. 2.35,
+        as pbrt-v4). Both estimate the same filtered image; splatting reuses each sample in up
+        to $(2r+1)^2$ pixels, which for the Gaussian of the Cornell box divides the pixel
+        variance by about $4\pi\sigma^2 \approx 3$ at the cost of correlated noise.
     - `return_xyz`: return CIE XYZ instead of linear sRGB.
 
     **Returns:**
@@ -208,17 +241,18 @@ def render(
         `Pharr2023` ch. 5, 13; `Jakob2022`; `Wilkie2014`.
     """
     spp = check_positive_int(spp, "spp")
-    scene, camera, rfilter, scene_depth = _resolve_scene(scene, camera, rfilter, width, height)
-    max_depth = scene_depth if max_depth is None else max_depth
-    spp = check_positive_int(spp, "spp")
-    max_depth = check_positive_int(max_depth, "max_depth")
+    if max_depth is not None:
+        max_depth = check_positive_int(max_depth, "max_depth")
     rr_depth = check_positive_int(rr_depth, "rr_depth")
     check_choice(integrator, "integrator", INTEGRATORS)
     check_choice(sampler, "sampler", SAMPLERS)
-    if integrator == "direct":
-        max_depth = min(max_depth, 2)
+    check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"`seed` must be an int, got {type(seed).__name__} {seed!r}.")
+    scene, camera, rfilter, scene_depth = _resolve_scene(scene, camera, rfilter, width, height)
+    max_depth = scene_depth if max_depth is None else max_depth
+    if integrator == "direct":  # the path estimator with two segments and no roulette
+        max_depth, rr_depth = min(max_depth, 2), 2
     width, height = int(camera.width), int(camera.height)
     n_pixels = width * height
     if n_pixels > _MAX_PIXELS:
@@ -242,7 +276,8 @@ def render(
         )
     plan = _plan(n_pixels, spp, batch, len(devices))
     kernel = _Kernel(scene, camera, rfilter, Film(1, 1, dtype=jnp.float32))
-    step = _compiled_step(plan, spp, width, max_depth, rr_depth, integrator, sampler, tuple(devices))
+    cfg = _Config(plan, spp, width, max_depth, rr_depth, sampler, reconstruction, tuple(devices))
+    step = _compiled_step(cfg)
     key = jax.random.key(int(seed))
     film = Film(width, height, dtype=jnp.float32)
 
@@ -275,7 +310,10 @@ def _resolve_scene(scene, camera, rfilter, width, height):
     if isinstance(scene, RenderScene):
         if camera is None:
             raise ValueError("Rendering a `RenderScene` needs `camera` (a PinholeCamera).")
-        for name, value, have in (("width", width, camera.width), ("height", height, camera.height)):
+        for name, value, have in (
+            ("width", width, camera.width),
+            ("height", height, camera.height),
+        ):
             if value is not None and value != have:
                 raise ValueError(
                     f"`{name}`={value} differs from the camera's {have} [px]; build the camera "
@@ -306,32 +344,22 @@ def _default_batch(devices, n_triangles: int, max_depth: int) -> int:
 _STEP_CACHE: dict = {}
 
 
-def _compiled_step(plan, spp, width, max_depth, rr_depth, integrator, sampler, devices):
-    """The jitted step for one configuration, sharded over `devices` (cached)."""
-    cache_key = (plan, spp, width, max_depth, rr_depth, integrator, sampler, devices)
-    if cache_key in _STEP_CACHE:
-        return _STEP_CACHE[cache_key]
+def _compiled_step(cfg: _Config):
+    """The jitted step `(film, kernel, key, pass_start, pixel) -> film` for `cfg` (cached).
+
+    The paths are traced under `jax.shard_map` over a 1-D mesh of `cfg.devices`, each device
+    taking its share of the tile's pixels; their results are then added to the film (replicated
+    accumulators), which gathers them from the devices.
+    """
+    if cfg in _STEP_CACHE:
+        return _STEP_CACHE[cfg]
     from jax.sharding import Mesh, PartitionSpec as P
 
-    mesh = Mesh(np.asarray(devices), ("pixels",))
+    from ..camera import splat_samples
 
-    def local(kernel, key, pass_start, pixel):
-        return _paths_xyz(
-            kernel,
-            key,
-            pass_start,
-            pixel,
-            plan=plan,
-            spp=spp,
-            width=width,
-            max_depth=max_depth,
-            rr_depth=rr_depth,
-            integrator=integrator,
-            sampler=sampler,
-        )
-
-    paths = jax.shard_map(
-        local,
+    mesh = Mesh(np.asarray(cfg.devices), ("pixels",))
+    trace = jax.shard_map(
+        functools.partial(_trace, cfg=cfg),
         mesh=mesh,
         in_specs=(P(), P(), P(), P("pixels")),
         out_specs=P("pixels"),
@@ -340,21 +368,26 @@ def _compiled_step(plan, spp, width, max_depth, rr_depth, integrator, sampler, d
 
     @functools.partial(jax.jit, donate_argnums=0)
     def step(film, kernel, key, pass_start, pixel):
-        # Each device traces its share of the tile; the per-pixel sums (already weighted, one
-        # entry per pixel, so the scatter has no duplicates and is deterministic everywhere)
-        # are added to the film's accumulators; indices past the image are dropped.
-        contrib = paths(kernel, key, pass_start, pixel)
-        xyz_sum = film.xyz_sum.reshape(-1, 3).at[pixel].add(contrib[:, :3], mode="drop")
-        weight_sum = film.weight_sum.reshape(-1).at[pixel].add(contrib[:, 3], mode="drop")
+        raster, xyz, weight = trace(kernel, key, pass_start, pixel)
+        if cfg.reconstruction == "splat":
+            return splat_samples(film, raster, xyz, kernel.rfilter, weight)
+        # One entry per pixel (its k samples summed first), so the scatter has no duplicate
+        # indices and its result does not depend on the order of additions; indices past the
+        # image are dropped.
+        k = cfg.plan.passes
+        xyz_sum = jnp.sum((xyz * weight[:, None]).reshape(-1, k, 3), axis=1)
+        w_sum = jnp.sum(weight.reshape(-1, k), axis=1)
+        xyz_acc = film.xyz_sum.reshape(-1, 3).at[pixel].add(xyz_sum, mode="drop")
+        w_acc = film.weight_sum.reshape(-1).at[pixel].add(w_sum, mode="drop")
         return eqx.tree_at(
             lambda f: (f.xyz_sum, f.weight_sum),
             film,
-            (xyz_sum.reshape(film.xyz_sum.shape), weight_sum.reshape(film.weight_sum.shape)),
+            (xyz_acc.reshape(film.xyz_sum.shape), w_acc.reshape(film.weight_sum.shape)),
         )
 
     if len(_STEP_CACHE) > 16:
         _STEP_CACHE.clear()
-    _STEP_CACHE[cache_key] = step
+    _STEP_CACHE[cfg] = step
     return step
 
 

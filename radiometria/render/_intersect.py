@@ -311,6 +311,111 @@ def _gamma(n: int, dtype) -> float:
     return n * eps / (1.0 - n * eps)
 
 
+def _lane_step(bvh: BVH, state, *, any_hit: bool):
+    """One traversal iteration for every lane (see `_traverse`).
+
+    The node step and the triangle step each run inside a `lax.cond` (skipped when no lane
+    needs it). Besides the skip, the conditional is a fusion boundary: XLA:CPU otherwise
+    duplicates the slab and edge-function arithmetic into every consumer fusion (measured: 8
+    copies of the node step, 5x slower); `lax.optimization_barrier` does not survive to
+    fusion on CPU.
+    """
+    dtype = bvh.triangles.dtype
+    depth = max(bvh.stack_size, 1)
+    empty = jnp.int32(EMPTY)
+    grow = 1.0 + 2.0 * _gamma(3, dtype)
+    (cur, stack, sp, lcur, lend, t_best, prim, kbest, rid, c) = state
+    rows = jnp.arange(cur.shape[0])
+    ox, oy, oz, ix, iy, iz, pox, poy, poz, sx, sy, sz, t_lo, t_hi, kzf = c
+    # 1. pop the next item when there is none
+    do_pop = (cur == empty) & (sp > 0)
+    top = jnp.take_along_axis(stack, jnp.maximum(sp - 1, 0)[:, None], axis=1)[:, 0]
+    cur = jnp.where(do_pop, top, cur)
+    sp = sp - do_pop.astype(jnp.int32)
+    # 2. interior node: cull and order both children (robust slab test, Ize 2013)
+    inner = cur >= 0
+
+    def node_step(cur, t_best):
+        node = jnp.where(inner, cur, 0)
+        box = bvh.node_boxes[node]
+        ch = bvh.node_children[node]
+
+        def slab(j):
+            t0x, t1x = (box[:, j + 0] - ox) * ix, (box[:, j + 3] - ox) * ix
+            t0y, t1y = (box[:, j + 1] - oy) * iy, (box[:, j + 4] - oy) * iy
+            t0z, t1z = (box[:, j + 2] - oz) * iz, (box[:, j + 5] - oz) * iz
+            near = jnp.maximum(
+                jnp.maximum(jnp.minimum(t0x, t1x), jnp.minimum(t0y, t1y)),
+                jnp.maximum(jnp.minimum(t0z, t1z), t_lo),
+            )
+            far = jnp.minimum(
+                jnp.minimum(jnp.maximum(t0x, t1x), jnp.maximum(t0y, t1y)),
+                jnp.maximum(t0z, t1z),
+            )
+            return near, inner & (near <= jnp.minimum(far * grow, t_best))
+
+        near0, hit0 = slab(0)
+        near1, hit1 = slab(6)
+        # One int8 output, so the slab tests are computed once: 0 = no child hit, 1 = only
+        # child 0, 2 = only child 1, 3 = both and child 0 nearer, 4 = both, child 1 nearer.
+        decision = jnp.where(
+            hit0 & hit1,
+            jnp.where(near1 < near0, 4, 3),
+            jnp.where(hit0, 1, jnp.where(hit1, 2, 0)),
+        ).astype(jnp.int8)
+        return decision, ch[:, 0], ch[:, 1]
+
+    def no_node_step(cur, t_best):
+        return jnp.zeros(cur.shape, jnp.int8), cur, cur
+
+    decision, c0, c1 = lax.cond(jnp.any(inner), node_step, no_node_step, cur, t_best)
+    nxt = jnp.where(
+        (decision == 1) | (decision == 3),
+        c0,
+        jnp.where((decision == 2) | (decision == 4), c1, empty),
+    )
+    cur = jnp.where(inner, nxt, cur)
+    both = decision >= 3
+    far_c = jnp.where(decision == 3, c1, c0)
+    stack = stack.at[rows, jnp.where(both, sp, depth)].set(far_c, mode="drop")
+    sp = sp + both.astype(jnp.int32)
+    # 3. leaf: load its triangle range when the previous one is done
+    pending = lcur < lend
+    load = (cur < 0) & (cur != empty) & ~pending
+    code = ~cur
+    start = code >> 3
+    lcur = jnp.where(load, start, lcur)
+    lend = jnp.where(load, start + (code & 7) + 1, lend)
+    cur = jnp.where(load, empty, cur)
+    pending = pending | load
+
+    # 4. test one pending triangle (watertight, Woop et al. 2013)
+    def tri_step(lcur):
+        k = jnp.where(pending, lcur, 0)
+        tv = bvh.triangles[k]
+        kz0, kz1, kz2 = kzf == 0, kzf == 1, kzf == 2
+        lane_ray = _Ray(kz2, kz0, kz1, kz2, kz0, kz1, pox, poy, poz, sx, sy, sz)
+        v0, v1, v2 = _columns(tv)
+        hit, t, _, _ = _triangle_test(lane_ray, v0, v1, v2, t_lo, t_hi)
+        # one float output (NaN = no hit): the edge functions are computed once
+        return jnp.where(pending & hit, t, jnp.nan), bvh.prim_ids[k]
+
+    def no_tri_step(lcur):
+        return jnp.full(lcur.shape, jnp.nan, dtype), lcur
+
+    t_cand, pid = lax.cond(jnp.any(pending), tri_step, no_tri_step, lcur)
+    upd = (t_cand < t_best) | ((t_cand == t_best) & (pid < prim))  # NaN compares False
+    t_best = jnp.where(upd, t_cand, t_best)
+    prim = jnp.where(upd, pid, prim)
+    kbest = jnp.where(upd, lcur, kbest)
+    lcur = lcur + pending.astype(jnp.int32)
+    if any_hit:  # the first hit ends the ray
+        cur = jnp.where(upd, empty, cur)
+        sp = jnp.where(upd, 0, sp)
+        lend = jnp.where(upd, lcur, lend)
+    return (cur, stack, sp, lcur, lend, t_best, prim, kbest, rid, c)
+
+
 def _traverse(bvh: BVH, o, d, tmin, tmax, *, any_hit: bool, lanes: int, refill_every: int):
     """Stack-based BVH traversal over a batch of rays with persistent lanes.
 
@@ -339,94 +444,26 @@ def _traverse(bvh: BVH, o, d, tmin, tmax, *, any_hit: bool, lanes: int, refill_e
          ray.sx, ray.sy, ray.sz, tmin, tmax, kz],
         axis=1,
     )  # fmt: skip
-    grow = 1.0 + 2.0 * _gamma(3, dtype)
-    rows = jnp.arange(w)
 
     def step(state):
-        (cur, stack, sp, lcur, lend, t_best, prim, b1, b2, rid, c) = state
-        ox, oy, oz, ix, iy, iz, pox, poy, poz, sx, sy, sz, t_lo, t_hi, kzf = c
-        # 1. pop the next item when there is none
-        do_pop = (cur == empty) & (sp > 0)
-        top = jnp.take_along_axis(stack, jnp.maximum(sp - 1, 0)[:, None], axis=1)[:, 0]
-        cur = jnp.where(do_pop, top, cur)
-        sp = sp - do_pop.astype(jnp.int32)
-        # 2. interior node: cull and order both children (robust slab test, Ize 2013)
-        inner = cur >= 0
-        node = jnp.where(inner, cur, 0)
-        box = bvh.node_boxes[node]
-        ch = bvh.node_children[node]
-
-        def slab(j):
-            t0x, t1x = (box[:, j + 0] - ox) * ix, (box[:, j + 3] - ox) * ix
-            t0y, t1y = (box[:, j + 1] - oy) * iy, (box[:, j + 4] - oy) * iy
-            t0z, t1z = (box[:, j + 2] - oz) * iz, (box[:, j + 5] - oz) * iz
-            near = jnp.maximum(
-                jnp.maximum(jnp.minimum(t0x, t1x), jnp.minimum(t0y, t1y)),
-                jnp.maximum(jnp.minimum(t0z, t1z), t_lo),
-            )
-            far = jnp.minimum(
-                jnp.minimum(jnp.maximum(t0x, t1x), jnp.maximum(t0y, t1y)), jnp.maximum(t0z, t1z)
-            )
-            return near, inner & (near <= jnp.minimum(far * grow, t_best))
-
-        near0, hit0 = slab(0)
-        near1, hit1 = slab(6)
-        c0, c1 = ch[:, 0], ch[:, 1]
-        first1 = near1 < near0
-        both = hit0 & hit1
-        nxt = jnp.where(
-            both, jnp.where(first1, c1, c0), jnp.where(hit0, c0, jnp.where(hit1, c1, empty))
-        )
-        far_c = jnp.where(first1, c0, c1)
-        cur = jnp.where(inner, nxt, cur)
-        stack = stack.at[rows, jnp.where(both, sp, depth)].set(far_c, mode="drop")
-        sp = sp + both.astype(jnp.int32)
-        # 3. leaf: load its triangle range when the previous one is done
-        pending = lcur < lend
-        load = (cur < 0) & (cur != empty) & ~pending
-        code = ~cur
-        start = code >> 3
-        lcur = jnp.where(load, start, lcur)
-        lend = jnp.where(load, start + (code & 7) + 1, lend)
-        cur = jnp.where(load, empty, cur)
-        pending = pending | load
-        # 4. test one pending triangle (watertight, Woop et al. 2013)
-        k = jnp.where(pending, lcur, 0)
-        tv = bvh.triangles[k]
-        kz0, kz1, kz2 = kzf == 0, kzf == 1, kzf == 2
-        lane_ray = _Ray(kz2, kz0, kz1, kz2, kz0, kz1, pox, poy, poz, sx, sy, sz)
-        v0, v1, v2 = _columns(tv)
-        hit, t, u1, u2 = _triangle_test(lane_ray, v0, v1, v2, t_lo, t_hi)
-        pid = bvh.prim_ids[k]
-        upd = pending & hit & ((t < t_best) | ((t == t_best) & (pid < prim)))
-        t_best = jnp.where(upd, t, t_best)
-        prim = jnp.where(upd, pid, prim)
-        b1 = jnp.where(upd, u1, b1)
-        b2 = jnp.where(upd, u2, b2)
-        lcur = lcur + pending.astype(jnp.int32)
-        if any_hit:  # the first hit ends the ray
-            cur = jnp.where(upd, empty, cur)
-            sp = jnp.where(upd, 0, sp)
-            lend = jnp.where(upd, lcur, lend)
-        return (cur, stack, sp, lcur, lend, t_best, prim, b1, b2, rid, c)
+        return _lane_step(bvh, state, any_hit=any_hit)
 
     def busy(state):
         cur, _, sp, lcur, lend = state[:5]
         return (cur != empty) | (sp > 0) | (lcur < lend)
 
     def write(state, out):
-        _, _, _, _, _, t_best, prim, b1, b2, rid, _ = state
+        t_best, prim, kbest, rid = state[5:9]
         idx = jnp.where((rid >= 0) & ~busy(state), rid, n)  # n: dropped
-        o_t, o_p, o_b1, o_b2 = out
+        o_t, o_p, o_k = out
         return (
-            o_t.at[idx].set(jnp.where(prim >= 0, t_best, jnp.inf), mode="drop"),
+            o_t.at[idx].set(t_best, mode="drop"),
             o_p.at[idx].set(prim, mode="drop"),
-            o_b1.at[idx].set(b1, mode="drop"),
-            o_b2.at[idx].set(b2, mode="drop"),
+            o_k.at[idx].set(kbest, mode="drop"),
         )
 
     def refill(state, nxt):
-        (cur, stack, sp, lcur, lend, t_best, prim, b1, b2, rid, c) = state
+        (cur, stack, sp, lcur, lend, t_best, prim, kbest, rid, c) = state
         free = ~busy(state)
         rank = jnp.cumsum(free.astype(jnp.int32)) - 1
         new = nxt + rank
@@ -441,7 +478,7 @@ def _traverse(bvh: BVH, o, d, tmin, tmax, *, any_hit: bool, lanes: int, refill_e
         prim = jnp.where(take, -1, prim)
         rid = jnp.where(take, new, jnp.where(free, -1, rid))
         nxt = jnp.minimum(nxt + jnp.sum(free, dtype=jnp.int32), n)
-        return (cur, stack, sp, lcur, lend, t_best, prim, b1, b2, rid, c), nxt
+        return (cur, stack, sp, lcur, lend, t_best, prim, kbest, rid, c), nxt
 
     def body(carry):
         state, out, nxt = carry
@@ -464,20 +501,27 @@ def _traverse(bvh: BVH, o, d, tmin, tmax, *, any_hit: bool, lanes: int, refill_e
         zi,
         zf,
         jnp.full(w, -1, jnp.int32),
-        zf,
-        zf,
+        zi,
         jnp.full(w, -1, jnp.int32),
         tuple(zf for _ in range(table.shape[1])),
     )
-    out = (
-        jnp.full(n, jnp.inf, dtype),
-        jnp.full(n, -1, jnp.int32),
-        jnp.zeros(n, dtype),
-        jnp.zeros(n, dtype),
-    )
+    out = (jnp.full(n, jnp.inf, dtype), jnp.full(n, -1, jnp.int32), jnp.zeros(n, jnp.int32))
     state, out, _ = lax.while_loop(cond, body, (state, out, jnp.int32(0)))
-    out = write(state, out)
-    return Hit(t=out[0], prim=out[1], b1=out[2], b2=out[3])
+    t_best, prim, kbest = write(state, out)
+    found = prim >= 0
+    if any_hit:
+        zero = jnp.zeros(n, dtype)
+        return Hit(t=jnp.where(found, t_best, jnp.inf), prim=prim, b1=zero, b2=zero)
+    # barycentrics of the closest hit only, outside the loop: one more test per ray
+    v0, v1, v2 = _columns(bvh.triangles[kbest])
+    _, _, b1, b2 = _triangle_test(ray, v0, v1, v2, tmin, tmax)
+    zero = jnp.zeros_like(b1)
+    return Hit(
+        t=jnp.where(found, t_best, jnp.inf),
+        prim=prim,
+        b1=jnp.where(found, b1, zero),
+        b2=jnp.where(found, b2, zero),
+    )
 
 
 _LANES = 2048

@@ -49,6 +49,7 @@ from ._fit import (
     grey_coefficients,
     lm_init,
     lm_iterate,
+    lm_solve,
     target_Lab,
 )
 from ._forward import forward_model
@@ -254,45 +255,66 @@ def _column_directions(resolution: int, dtype) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class _Schedule:
-    n_first: int  # LM steps for the cold start at k0
-    n_steps: int  # LM steps per brightness step
+    n_first: int  # LM steps (at most) for the cold start at k0
+    n_steps: int  # LM steps (at most) per brightness step
+    min_steps: int  # LM steps (at least) per brightness step
+    tolerance: float  # Delta E*ab
+    allowed_fraction: float  # rows that may miss the tolerance before a step ends
     chunk: int
 
 
-def _sweep(c_start, e, scale_ks, m, n_steps, chunk):
-    """Warm-started LM along the brightness nodes `scale_ks[1:]` (a `lax.scan`), every column.
+def _sweep_plan(res: int, k0: int) -> tuple[np.ndarray, np.ndarray]:
+    """Brightness indices in solve order, and where each starts from.
 
-    Each node starts from the previous node's solution (pbrt's continuation); the first
-    Gauss-Newton step from there is the tangent predictor of the solution curve. (A secant
-    extrapolation of the coefficients was tried and rejected: the coefficient curves bend
-    sharply near black and white, and the extrapolated start fell into a wrong local minimum.)
+    Order: k0 (cold, from c = 0), k0+1 .. res-1 (each from the previous), then k0-1 .. 1 (the
+    first from k0's solution, then each from the previous). `start[t]`: 0 = cold, 1 = previous
+    step, 2 = the solution at k0.
     """
-
-    def step(c, z):
-        lab_t = target_Lab(e * z, m)
-        s = lm_iterate(lm_init(c, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk)
-        return s.c, (s.c, jnp.sqrt(s.cost))
-
-    _, (cs, rs) = lax.scan(step, c_start, scale_ks[1:])
-    return cs, rs
+    order = [k0] + list(range(k0 + 1, res)) + list(range(k0 - 1, 0, -1))
+    start = [0] + [1] * (res - 1 - k0) + ([2] + [1] * (k0 - 2) if k0 > 1 else [])
+    return np.asarray(order, np.int32), np.asarray(start, np.int32)
 
 
 def _fit_columns(e, scale, k0, m, schedule: _Schedule):
-    """Coefficients (res, n, 3) and residuals (res, n) for the columns with directions e (n, 3)."""
+    """Coefficients (res, n, 3) and residuals (res, n) for the columns with directions e (n, 3).
+
+    One `lax.scan` over the brightness nodes in `_sweep_plan` order (a single compiled
+    Gauss-Newton loop); row 0 (black) is a placeholder set by the caller.
+    """
+    res = scale.shape[0]
     n = e.shape[0]
     dtype = e.dtype
-    lab0 = target_Lab(e * scale[k0], m)
-    s = lm_init(jnp.zeros((n, 3), dtype), lab0, m, chunk=schedule.chunk)
-    s = lm_iterate(s, lab0, m, schedule.n_first, chunk=schedule.chunk)
-    c0, r0 = s.c, jnp.sqrt(s.cost)
-    up_c, up_r = _sweep(c0, e, scale[k0:], m, schedule.n_steps, schedule.chunk)
-    dn_c, dn_r = _sweep(c0, e, scale[1 : k0 + 1][::-1], m, schedule.n_steps, schedule.chunk)
-    coeffs = jnp.concatenate([dn_c[::-1], c0[None], up_c], axis=0)
-    resid = jnp.concatenate([dn_r[::-1], r0[None], up_r], axis=0)
-    # Row 0 (black) is not fitted: placeholder copies of row 1 (set explicitly later).
+    order, start = _sweep_plan(res, k0)
+    max_steps = np.where(start == 0, schedule.n_first, schedule.n_steps).astype(np.int32)
+
+    def step(carry, xs):
+        c_prev, c_k0 = carry
+        k, how, n_max = xs
+        c_start = jnp.where(how == 0, 0.0, jnp.where(how == 1, c_prev, c_k0)).astype(dtype)
+        lab_t = target_Lab(e * scale[k], m)
+        n_it, s = lm_solve(
+            lm_init(c_start, lab_t, m, chunk=schedule.chunk),
+            lab_t,
+            m,
+            n_max,
+            schedule.tolerance,
+            min_steps=schedule.min_steps,
+            allowed_fraction=schedule.allowed_fraction,
+            chunk=schedule.chunk,
+        )
+        c_k0 = jnp.where(how == 0, s.c, c_k0)
+        return (s.c, c_k0), (s.c, jnp.sqrt(s.cost), n_it)
+
+    zeros = jnp.zeros((n, 3), dtype)
+    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), (jnp.asarray(order), jnp.asarray(start), jnp.asarray(max_steps)))
+    # Scatter back to brightness order; row 0 = copy of row 1 (placeholder).
+    inv = np.argsort(order)
+    coeffs = cs[inv]
+    resid = rs[inv]
     coeffs = jnp.concatenate([coeffs[:1], coeffs], axis=0)
     resid = jnp.concatenate([jnp.zeros_like(resid[:1]), resid], axis=0)
-    return coeffs, resid
+    iterations = jnp.concatenate([jnp.zeros_like(its[:1]), its[inv]], axis=0)
+    return coeffs, resid, iterations
 
 
 def _make_fit_fn(m: ModelArrays, scale, k0, schedule, mesh=None):
@@ -303,7 +325,9 @@ def _make_fit_fn(m: ModelArrays, scale, k0, schedule, mesh=None):
         return jax.jit(fn)
     from jax.sharding import PartitionSpec as P
 
-    sharded = jax.shard_map(fn, mesh=mesh, in_specs=P("columns"), out_specs=(P(None, "columns"), P(None, "columns")))
+    sharded = jax.shard_map(
+        fn, mesh=mesh, in_specs=P("columns"), out_specs=(P(None, "columns"), P(None, "columns"), P())
+    )
     return jax.jit(sharded)
 
 
@@ -353,8 +377,10 @@ def fit_lut(
     *,
     dtype=jnp.float32,
     tolerance: float = DEFAULT_TOLERANCE,
-    n_first: int = 40,
-    n_steps: int = 6,
+    n_first: int = 60,
+    n_steps: int = 12,
+    min_steps: int = 2,
+    allowed_fraction: float = 1e-3,
     repair_steps: int = 60,
     repair_rounds: int = 3,
     chunk: int = 512,
@@ -377,8 +403,10 @@ def fit_lut(
     - `resolution`: table size per axis, >= 2 (pbrt and Mitsuba use 64).
     - `dtype`: working and storage dtype (float32 default; float64 for reference fits).
     - `tolerance`: per-entry convergence criterion on $\Delta E^*_{ab}$. [-]
-    - `n_first`, `n_steps`: Gauss-Newton iterations for the cold start and per brightness
-        step; `repair_steps`, `repair_rounds`: the repair pass.
+    - `n_first`, `n_steps`: most Gauss-Newton iterations for the cold start and per
+        brightness step; `min_steps`: fewest per step; a step ends early once no more than
+        `allowed_fraction` of the columns miss the tolerance (those go to the repair pass);
+        `repair_steps`, `repair_rounds`: the repair pass.
     - `chunk`: colours per vectorised block (cache blocking).
     - `step_nm`: quadrature step of the forward model (1 nm default). [nm]
     - `devices`: sequence of devices to shard the columns over (None: default device).
@@ -407,7 +435,14 @@ def fit_lut(
     scale_np = brightness_scale(res)
     scale = jnp.asarray(scale_np, dtype)
     k0 = max(1, res // 5)
-    schedule = _Schedule(n_first=n_first, n_steps=n_steps, chunk=chunk)
+    schedule = _Schedule(
+        n_first=n_first,
+        n_steps=n_steps,
+        min_steps=min_steps,
+        tolerance=float(tolerance),
+        allowed_fraction=float(allowed_fraction),
+        chunk=chunk,
+    )
     e_np = _column_directions(res, np.float64)
     n_cols = e_np.shape[0]
 
@@ -428,7 +463,7 @@ def fit_lut(
     fit_fn = _make_fit_fn(m, scale, k0, schedule, mesh)
     if progress is not None:
         progress("sweep", 0, 1)
-    coeffs, resid = fit_fn(e)
+    coeffs, resid, iterations = fit_fn(e)
     coeffs = np.array(coeffs)[:, :n_cols]  # (res, n_cols, 3), normalised
     resid = np.array(resid)[:, :n_cols]
     if progress is not None:
@@ -470,6 +505,8 @@ def fit_lut(
         "solver": "damped Gauss-Newton (Levenberg-Marquardt), exact JAX Jacobian",
         "n_first": n_first,
         "n_steps": n_steps,
+        "min_steps": min_steps,
+        "allowed_fraction": allowed_fraction,
         "repair_steps": repair_steps,
         "repair_rounds": repair_rounds,
         "start_index": k0,

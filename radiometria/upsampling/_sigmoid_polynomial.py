@@ -35,7 +35,7 @@ def common_float_dtype(*arrays) -> np.dtype:
     Used instead of implicit promotion, so that mixing a float32 table with float64
     wavelengths works under `jax_numpy_dtype_promotion="strict"` (style.md section 10).
     """
-    strong = [a.dtype for a in arrays if not jax.dtypes.is_weakly_typed(a)]
+    strong = [a.dtype for a in arrays if not getattr(a, "weak_type", False)]
     if not strong:
         strong = [a.dtype for a in arrays]
     return np.result_type(*strong)

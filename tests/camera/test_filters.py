@@ -144,7 +144,9 @@ def test_filter_importance_sampling_agrees_with_splatting(name):
     # Splatting (eq. 2.34): uniform samples over the film, each splatted to its footprint.
     film = cam.Film(width, height, cmfs=_flat_cmfs())
     m, batch = 150_000, 30_000
-    xy = jax.random.uniform(jax.random.key(4), (m, 2)) * jnp.asarray([[float(width), float(height)]])
+    xy = jax.random.uniform(jax.random.key(4), (m, 2)) * jnp.asarray(
+        [[float(width), float(height)]]
+    )
     rv = _image_function(xy)
     xyz = jnp.stack([rv, rv, rv], axis=-1)
     splat = jax.jit(cam.splat_samples)

@@ -95,7 +95,11 @@ def test_perspective_frustum_off_centre_and_decomposition():
         [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, (f + n) / (f - n), -2 * f * n / (f - n)], [0, 0, 1, 0]]
     )
     np.testing.assert_allclose(p, m229 @ m228, atol=1e-14)
-    for x, y, z, e in [(l, b, n, (-1, -1, -1)), (r, t, n, (1, 1, -1)), (l * f / n, t * f / n, f, (-1, 1, 1))]:
+    for x, y, z, e in [
+        (l, b, n, (-1, -1, -1)),
+        (r, t, n, (1, 1, -1)),
+        (l * f / n, t * f / n, f, (-1, 1, 1)),
+    ]:
         c = p @ np.array([x, y, z, 1.0])
         np.testing.assert_allclose(c[:3] / c[3], e, atol=1e-12)
 
@@ -104,7 +108,9 @@ def test_fov_axis_conversions_match_mitsuba_rule():
     aspect = 2.0
     t = np.tan(np.deg2rad(30.0) / 2)
     assert float(cam.fov_x_deg(30.0, aspect, "x")) == pytest.approx(30.0)
-    assert float(cam.fov_x_deg(30.0, aspect, "y")) == pytest.approx(np.rad2deg(2 * np.arctan(t * 2)))
+    assert float(cam.fov_x_deg(30.0, aspect, "y")) == pytest.approx(
+        np.rad2deg(2 * np.arctan(t * 2))
+    )
     diag = np.rad2deg(2 * np.arctan(t / np.sqrt(1 + 1 / aspect**2)))
     assert float(cam.fov_x_deg(30.0, aspect, "diagonal")) == pytest.approx(diag)
     assert float(cam.fov_x_deg(30.0, aspect, "smaller")) == float(cam.fov_x_deg(30.0, aspect, "y"))
@@ -184,7 +190,9 @@ def test_rays_match_mitsuba_perspective_sensor():
         c = cam.PinholeCamera.from_to_world(to_world, fov, w, h, axis)
         o, d = (np.asarray(a) for a in cam.generate_ray(c, raster))
         for k, (x, y) in enumerate(raster):
-            ray, _ = sensor.sample_ray(0.0, 0.5, mi.ScalarPoint2f(x / w, y / h), mi.ScalarPoint2f(0.5, 0.5))
+            ray, _ = sensor.sample_ray(
+                0.0, 0.5, mi.ScalarPoint2f(x / w, y / h), mi.ScalarPoint2f(0.5, 0.5)
+            )
             d_mi = np.array(ray.d, float)
             np.testing.assert_allclose(d[k], d_mi / np.linalg.norm(d_mi), atol=2e-6)
             # Mitsuba starts the ray on the near plane: its origin lies on our ray.

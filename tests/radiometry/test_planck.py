@@ -229,6 +229,17 @@ def test_planck_near_branch_switch_continuous(dtype):
     )
 
 
+@pytest.mark.parametrize("x", [19.5, 20.0, 20.5, 80.0, 800.0])
+def test_planck_kernel_gradient_at_branch_switch(x):
+    # d/dx [1 / expm1(x)] = -e^x / expm1(x)^2, exactly also at the switch point x = 20.
+    from radiometria.radiometry._planck import _prefactor_over_expm1
+
+    fn = lambda x: _prefactor_over_expm1(jnp.asarray(1.0), jnp.asarray(0.0), x)
+    expected = -math.exp(-x) / (-math.expm1(-x)) ** 2  # the same, written without overflow
+    assert float(jax.grad(fn)(jnp.asarray(x))) == pytest.approx(expected, rel=1e-13)
+    assert float(fn(jnp.asarray(x))) == pytest.approx(math.exp(-x) / -math.expm1(-x), rel=1e-14)
+
+
 # --- Transformations ----------------------------------------------------------------------------
 
 

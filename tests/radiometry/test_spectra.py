@@ -173,3 +173,13 @@ def test_resample_spectrum_bad_input_and_nan():
         resample_spectrum(np.ones(3), grid[::-1], grid)
     out = resample_spectrum(np.ones(3), grid, np.array([np.nan, 450.0]))
     assert np.isnan(float(out[0])) and float(out[1]) == 1.0
+
+
+def test_resample_spectrum_gradient_at_end_samples():
+    # At the end samples the one-sided (inside) slope is used, in full.
+    grid = jnp.asarray([400.0, 500.0, 600.0])
+    values = jnp.asarray([1.0, 2.0, 4.0])
+    slope = jax.grad(lambda x: resample_spectrum(values, grid, x))
+    assert float(slope(jnp.asarray(600.0))) == pytest.approx(0.02, rel=1e-14)
+    assert float(slope(jnp.asarray(400.0))) == pytest.approx(0.01, rel=1e-14)
+    assert float(slope(jnp.asarray(650.0))) == 0.0

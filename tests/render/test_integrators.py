@@ -2,55 +2,13 @@
 
 import math
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from radiometria.camera import PinholeCamera
-from radiometria.render import (
-    RenderScene,
-    SpectrumTable,
-    direct_radiance,
-    path_radiance,
-    render,
-    sample_dimensions,
-    wavelength_grid_nm,
-)
+from radiometria.render import RenderScene, render
 
-N_GRID = wavelength_grid_nm().shape[0]
-
-
-def constant_table(*values):
-    return SpectrumTable(jnp.asarray(np.outer(values, np.ones(N_GRID)), jnp.float32))
-
-
-def quad(corners):
-    """Two triangles (v0, v1, v2), (v0, v2, v3) of a quad; normal by the right-hand rule."""
-    return np.asarray(corners, float), np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def merge(*quads):
-    verts, faces, off = [], [], 0
-    for v, f in quads:
-        verts.append(v)
-        faces.append(f + off)
-        off += len(v)
-    return np.concatenate(verts), np.concatenate(faces)
-
-
-def inward_cube(h=1.0):
-    """The six faces of [-h, h]^3, their normals pointing into the cube."""
-    c = h
-    v, f = merge(
-        quad([[-c, -c, -c], [c, -c, -c], [c, -c, c], [-c, -c, c]]),  # y = -c
-        quad([[-c, c, -c], [-c, c, c], [c, c, c], [c, c, -c]]),  # y = +c
-        quad([[-c, -c, -c], [-c, -c, c], [-c, c, c], [-c, c, -c]]),  # x = -c
-        quad([[c, -c, -c], [c, c, -c], [c, c, c], [c, -c, c]]),  # x = +c
-        quad([[-c, -c, -c], [-c, c, -c], [c, c, -c], [c, -c, -c]]),  # z = -c
-        quad([[-c, -c, c], [c, -c, c], [c, c, c], [-c, c, c]]),  # z = +c
-    )
-    return v, f[:, ::-1]  # the corners above wind outwards: reverse them
+from ._synthetic import constant_table, inward_cube, merge, quad
 
 
 def test_inward_cube_normals_point_inside():
@@ -67,7 +25,12 @@ def test_path_white_furnace(albedo):
     le = 0.7
     v, f = inward_cube()
     scene = RenderScene.from_triangles(
-        v, f, np.zeros(len(f), int), constant_table(albedo), np.zeros(len(f), int), constant_table(le)
+        v,
+        f,
+        np.zeros(len(f), int),
+        constant_table(albedo),
+        np.zeros(len(f), int),
+        constant_table(le),
     )
     cam = PinholeCamera.from_look_at(
         np.array([0.1, 0.2, -0.3]), np.array([0.5, 0.3, 1.0]), np.array([0.0, 1, 0]), 70.0, 16, 16
@@ -108,8 +71,14 @@ def test_direct_irradiance_under_rectangle_light(integrator):
         np.array([0, h / 2, 0]), np.zeros(3), np.array([0.0, 0, 1]), 1.0, 8, 8
     )
     xyz = render(
-        scene, camera=cam, spp=256, max_depth=2, integrator=integrator, seed=3,
-        progress=False, return_xyz=True,
+        scene,
+        camera=cam,
+        spp=256,
+        max_depth=2,
+        integrator=integrator,
+        seed=3,
+        progress=False,
+        return_xyz=True,
     )
     expected = albedo / math.pi * _irradiance_below_rectangle_centre(a, b, h, le)
     assert np.mean(xyz[..., 1]) == pytest.approx(expected, rel=5e-3)

@@ -1,0 +1,132 @@
+"""`radiometria render` and the render half of `radiometria demo`.
+
+Everything a user can get wrong is checked before any rendering starts: the sample count, the
+image size, the depth, the output format (by extension: `.exr` is linear sRGB with float32
+channels R, G, B; `.png` is 8-bit sRGB-encoded) and whether the output can be written.
+"""
+
+import argparse
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["MAX_IMAGE_SIDE", "demo_render", "render_command"]
+
+MAX_IMAGE_SIDE = 16384  # px: the command line refuses larger images (the library checks memory)
+_FORMATS = (".exr", ".png")
+
+
+def _check_output(path: Path) -> Path:
+    """The output must be .exr/.png in an existing, writable directory (probed, then removed)."""
+    path = Path(path)
+    if path.suffix.lower() not in _FORMATS:
+        got = path.suffix or "no extension"
+        raise ValueError(f"Output {str(path)!r} must end in .exr or .png (got {got!r}).")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise OSError(f"Cannot write {str(path)!r}: directory {str(parent)!r} does not exist.")
+    if path.is_dir():
+        raise OSError(f"Cannot write {str(path)!r}: it is a directory.")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".radiometria-probe-", dir=parent)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as err:
+        raise OSError(f"Cannot write {str(path)!r}: {err.strerror or err}.") from None
+    if path.exists() and not os.access(path, os.W_OK):
+        raise OSError(f"Cannot write {str(path)!r}: the file is not writable.")
+    return path
+
+
+def _check_int(value, name: str, low: int, high: int | None = None) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"--{name.replace('_', '-')} must be an integer, got {value!r}.")
+    if value < low or (high is not None and value > high):
+        bound = f">= {low}" if high is None else f"in [{low}, {high}]"
+        raise ValueError(f"--{name.replace('_', '-')} must be {bound}, got {value}.")
+    return value
+
+
+def _write(path: Path, rgb, metadata: dict) -> Path:
+    from ..camera import write_exr, write_png
+
+    if path.suffix.lower() == ".exr":
+        return write_exr(path, rgb, metadata)
+    return write_png(path, rgb)
+
+
+def _render_to(scene_name: str, *, spp, width, height, seed, max_depth, progress=True):
+    from .. import __version__
+    from ._driver import render
+
+    rgb = render(
+        scene_name,
+        spp=spp,
+        seed=seed,
+        width=width,
+        height=height,
+        max_depth=max_depth,
+        progress=progress,
+    )
+    metadata = {
+        "software": f"radiometria {__version__}",
+        "scene": str(scene_name),
+        "spp": int(spp),
+        "seed": int(seed),
+        "colorspace": "linear sRGB (Rec. 709 primaries, D65)",
+    }
+    if max_depth is not None:
+        metadata["max_depth"] = int(max_depth)
+    return rgb, metadata
+
+
+def render_command(args: argparse.Namespace) -> int:
+    """Run `radiometria render SCENE --spp N --out FILE [...]`; return the exit status.
+
+    Bad arguments raise `ValueError`, `TypeError` or `OSError` (the command turns them into
+    exit status 2 with the message) before anything is rendered.
+    """
+    spp = _check_int(args.spp, "spp", 1)
+    width = _check_int(args.width, "width", 1, MAX_IMAGE_SIDE)
+    height = _check_int(args.height, "height", 1, MAX_IMAGE_SIDE)
+    seed = _check_int(args.seed, "seed", 0, 2**31 - 1)
+    max_depth = _check_int(args.max_depth, "max_depth", 1, 1024)
+    out = _check_output(args.out)
+    rgb, metadata = _render_to(
+        args.scene, spp=spp, width=width, height=height, seed=seed, max_depth=max_depth
+    )
+    _write(out, rgb, metadata)
+    print(out)
+    return 0
+
+
+def demo_render(out_dir: Path, *, spp: int, smoke: bool) -> list[Path]:
+    """Render the built-in Cornell box into `out_dir/cornell_box.exr` and `.png`.
+
+    **Arguments:**
+
+    - `out_dir`: output directory (created if missing).
+    - `spp`: samples per pixel (>= 1).
+    - `smoke`: a tiny render for CI (32 x 32 pixels, at most 4 spp).
+
+    **Returns:**
+
+    The written paths.
+    """
+    spp = _check_int(spp, "spp", 1)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    exr = _check_output(out_dir / "cornell_box.exr")
+    png = _check_output(out_dir / "cornell_box.png")
+    size = 32 if smoke else None
+    rgb, metadata = _render_to(
+        "cornell-box",
+        spp=min(spp, 4) if smoke else spp,
+        width=size,
+        height=size,
+        seed=0,
+        max_depth=None,
+    )
+    return [_write(exr, rgb, metadata), _write(png, rgb, metadata)]
