@@ -27,9 +27,7 @@ OUT.mkdir(parents=True, exist_ok=True)
 eta = 1.5
 brewster = jnp.arctan(eta)  # [rad]
 r_s, r_p = rm.scattering.fresnel_dielectric_polarized(jnp.cos(brewster), eta)
-print(
-    f"Brewster angle {jnp.degrees(brewster):.2f} deg: R_s = {float(r_s):.4f}, R_p = {float(r_p):.1e}"
-)
+print(f"Brewster {jnp.degrees(brewster):.2f} deg: R_s = {float(r_s):.4f}, R_p = {float(r_p):.1e}")
 print(f"normal incidence: R = {float(rm.scattering.fresnel_dielectric(1.0, eta)):.4f}")
 print(f"closed form ((eta-1)/(eta+1))^2 = {((eta - 1) / (eta + 1)) ** 2:.4f}")
 
