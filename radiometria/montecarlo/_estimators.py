@@ -96,7 +96,7 @@ def estimate_mean(values, *, axis: int = 0) -> Estimate:
     return _terms_estimate(v, axis)
 
 
-def _variates(n: int, dim: int, key: Key | None, u) -> Array:
+def _variates(n: int | None, dim: int, key: Key | None, u) -> Array:
     if u is not None:
         if key is not None:
             raise ValueError("Pass either `key` or `u`, not both.")

@@ -164,7 +164,7 @@ def test_roulette_and_split_unbiased():
     w = jnp.array([0.05, 0.4, 1.0, 2.3, 7.6])
     u = jax.random.uniform(jax.random.key(11), (200_000, 1))
     copies, new_w = mc.roulette_and_split(w[None, :], 1.0, u)
-    total = np.asarray(copies * new_w)
+    total = np.asarray(copies).astype(float) * np.asarray(new_w)
     mean = total.mean(0)
     se = total.std(0) / math.sqrt(total.shape[0])
     assert np.all(np.abs(mean - np.asarray(w)) < T_MAX * se + 1e-12)
@@ -265,7 +265,8 @@ def test_convergence_discontinuous_is_slower_for_sobol():
     f, exact = mc.genz("discontinuous", [1.0, 1.0], [0.4, 0.7])
     study = mc.convergence_study(f, exact, [2**k for k in range(5, 14)], method="sobol", dim=2,
                                  key=jax.random.key(20), n_replicates=48)  # fmt: skip
-    assert -1.45 < float(study.slope) < -0.9
+    # An axis-aligned jump costs QMC its n^-3/2 rate (about n^-1 here, n^-3/4 if oblique).
+    assert -1.3 < float(study.slope) < -0.65
 
 
 def test_genz_exact_values_against_quadrature():
