@@ -89,21 +89,114 @@ def _target_dtype(vertices: np.ndarray, dtype) -> np.dtype:
     return np.dtype(jax.dtypes.canonicalize_dtype(dtype))
 
 
+_SWEEP_MAX = 16  # ranges up to this size are split by an exact sweep, larger ones by bins
+
+
+def _ranges(start, count):
+    """Positions in `order` of the concatenated ranges, and each position's range index."""
+    offs = np.concatenate([[0], np.cumsum(count)[:-1]])
+    item = np.repeat(np.arange(len(count)), count)
+    pos = np.repeat(start - offs, count) + np.arange(item.size)
+    return pos, item, offs
+
+
+def _split_binned(order, start, count, clo, chi, cen, lohi, n_bins):
+    """Binned SAH (`Wald2007`) on the widest centroid axis of each range; partitions `order`
+    in place (stably) and returns the left counts. Ranges whose centroids coincide are split at
+    the median index."""
+    pos, item, offs = _ranges(start, count)
+    tri = order[pos]
+    k = len(count)
+    ext_all = chi - clo
+    axis = np.argmax(ext_all, axis=1)
+    ext = ext_all[np.arange(k), axis]
+    scale = np.where(ext > 0, n_bins * (1.0 - 1e-12) / np.where(ext > 0, ext, 1.0), 0.0)
+    c = cen[tri, axis[item]]
+    b = ((c - clo[np.arange(k), axis][item]) * scale[item]).astype(np.int64)
+    np.clip(b, 0, n_bins - 1, out=b)
+    keys = item * n_bins + b
+    counts = np.bincount(keys, minlength=k * n_bins).reshape(k, n_bins)
+    bb = np.full((k * n_bins, 6), np.inf, lohi.dtype)
+    np.minimum.at(bb, keys, lohi[tri])
+    bb = bb.reshape(k, n_bins, 6)
+    left = np.minimum.accumulate(bb, axis=1)[:, :-1]
+    right = np.minimum.accumulate(bb[:, ::-1], axis=1)[:, ::-1][:, 1:]
+    nl = np.cumsum(counts, axis=1)[:, :-1]
+    nr = count[:, None] - nl
+    with np.errstate(invalid="ignore", over="ignore"):
+        cost = _box_area(left[..., :3], -left[..., 3:]) * nl
+        cost += _box_area(right[..., :3], -right[..., 3:]) * nr
+    cost = np.where((nl > 0) & (nr > 0), cost, np.inf)
+    best = np.argmin(cost, axis=1)
+    median = ~np.isfinite(cost[np.arange(k), best])  # all centroids in one bin: ext == 0
+    rank = np.arange(item.size) - offs[item]
+    go_left = np.where(median[item], rank < count[item] // 2, b <= best[item])
+    csum = np.cumsum(go_left)
+    before = np.concatenate([[0], csum])[offs]
+    n_left = csum[np.concatenate([offs[1:], [item.size]]) - 1] - before
+    rank_l = csum - 1 - before[item]
+    rank_r = rank - (csum - before[item])
+    order[start[item] + np.where(go_left, rank_l, n_left[item] + rank_r)] = tri
+    return n_left
+
+
+def _split_sweep(order, start, count, cen, lohi):
+    """Exact sweep SAH over all three axes for small ranges (<= `_SWEEP_MAX` triangles), padded
+    to a fixed width so that all ranges of a level are processed at once. Sorts each range along
+    its best axis in place and returns the left counts."""
+    k = len(count)
+    width = int(count.max())
+    slot = np.arange(width)
+    valid = slot[None, :] < count[:, None]
+    pos = np.where(valid, start[:, None] + slot, 0)
+    tri = order[pos]
+    best_cost = np.full(k, np.inf)
+    best_axis = np.zeros(k, np.int64)
+    best_pos = np.zeros(k, np.int64)
+    nl = slot[None, :-1] + 1
+    nr = count[:, None] - nl
+    sorted_slots = []
+    for a in range(3):
+        c = np.where(valid, cen[tri, a], np.inf)
+        idx = np.argsort(c, axis=1, kind="stable")
+        sorted_slots.append(idx)
+        box = np.where(valid[..., None], lohi[tri], np.inf)
+        box = np.take_along_axis(box, idx[..., None], axis=1)
+        left = np.minimum.accumulate(box, axis=1)[:, :-1]
+        right = np.minimum.accumulate(box[:, ::-1], axis=1)[:, ::-1][:, 1:]
+        with np.errstate(invalid="ignore", over="ignore"):
+            cost = _box_area(left[..., :3], -left[..., 3:]) * nl
+            cost += _box_area(right[..., :3], -right[..., 3:]) * nr
+        cost = np.where(nr > 0, np.nan_to_num(cost, nan=np.inf), np.inf)
+        p = np.argmin(cost, axis=1)
+        cp = cost[np.arange(k), p]
+        better = cp < best_cost
+        best_cost = np.where(better, cp, best_cost)
+        best_axis = np.where(better, a, best_axis)
+        best_pos = np.where(better, p, best_pos)
+    idx = np.stack(sorted_slots)[best_axis, np.arange(k)]
+    tri_sorted = np.take_along_axis(tri, idx, axis=1)
+    order[pos[valid]] = tri_sorted[valid]
+    return best_pos + 1
+
+
 def build_bvh(
     vertices: ArrayLike,
     faces: ArrayLike,
     *,
     max_leaf_size: int = 4,
     n_bins: int = 16,
-    traversal_cost: float = 1.0,
     dtype=None,
 ) -> BVH:
     r"""Build a BVH over a triangle mesh with the binned surface area heuristic (NumPy, offline).
 
-    Each node is split at the best of `n_bins - 1` planes per axis, scored by the SAH cost
-    $C = C_t + (A_L N_L + A_R N_R) / A$ (triangle test cost 1). A node with at most
-    `max_leaf_size` triangles becomes a leaf when that is cheaper ($N \le C$); larger nodes
-    are always split. Nodes whose triangle centroids coincide are split at the median index.
+    A node with at most `max_leaf_size` triangles becomes a leaf (small leaves suit the
+    lockstep traversal, which tests one triangle per iteration). A larger node is split where
+    the surface area heuristic cost $C = A_L N_L + A_R N_R$ is least: nodes of more than 16
+    triangles at the best of `n_bins - 1` planes between centroid bins along the widest
+    centroid axis (`Wald2007`), smaller ones at the best of all object splits along all three
+    axes (an exact sweep). A node whose triangle centroids all coincide is split at the median
+    index.
 
     **Arguments:**
 
@@ -111,8 +204,6 @@ def build_bvh(
     - `faces`: `(f, 3)` integer vertex indices, `f < 2^28`.
     - `max_leaf_size`: largest leaf, 1 to 8 (default 4).
     - `n_bins`: SAH bins per axis and node, >= 2 (default 16).
-    - `traversal_cost`: SAH cost of one node visit relative to one triangle test.
-        [dimensionless]
     - `dtype`: floating dtype of the stored arrays; defaults to that of `vertices`
         (float32 when JAX's x64 mode is off).
 
@@ -170,56 +261,9 @@ def build_bvh(
         scene_hi = np.full(3, -np.inf, dt)
     depth = 1
     while len(q_start):
-        k = len(q_start)
         is_root = q_parent < 0
-        # ---- SAH binning of every range with > 1 triangle -------------------------------
-        cand = q_count > 1
-        split_axis = np.zeros(k, np.int64)
-        split_bin = np.zeros(k, np.int64)
-        split_cost = np.full(k, np.inf)
-        if np.any(cand):
-            ci = np.nonzero(cand)[0]
-            cnt = q_count[ci]
-            item = np.repeat(np.arange(len(ci)), cnt)
-            offs = np.concatenate([[0], np.cumsum(cnt)[:-1]])
-            pos = np.repeat(q_start[ci] - offs, cnt) + np.arange(item.size)
-            tri = order[pos]
-            ext = q_chi[ci] - q_clo[ci]
-            scale = np.where(ext > 0, n_bins * (1.0 - 1e-12) / np.where(ext > 0, ext, 1.0), 0.0)
-            b = ((cen[tri] - q_clo[ci][item]) * scale[item]).astype(np.int64)
-            np.clip(b, 0, n_bins - 1, out=b)
-            keys = (item[:, None] * 3 + np.arange(3)) * n_bins + b  # (t, 3)
-            nk = len(ci) * 3 * n_bins
-            counts = np.bincount(keys.ravel(), minlength=nk).reshape(len(ci), 3, n_bins)
-            bb = np.full((nk, 6), np.inf, dt)
-            np.minimum.at(bb, keys.ravel(), np.repeat(lohi[tri], 3, axis=0))
-            bb = bb.reshape(len(ci), 3, n_bins, 6).astype(np.float64)
-            left = np.minimum.accumulate(bb, axis=2)[:, :, :-1]
-            right = np.minimum.accumulate(bb[:, :, ::-1], axis=2)[:, :, ::-1][:, :, 1:]
-            n_left = np.cumsum(counts, axis=2)[:, :, :-1]
-            n_right = cnt[:, None, None] - n_left
-            with np.errstate(invalid="ignore"):
-                a_left = _box_area(left[..., :3], -left[..., 3:])
-                a_right = _box_area(right[..., :3], -right[..., 3:])
-            a_node = _box_area(
-                np.minimum.reduceat(lo[tri], offs).astype(np.float64),
-                np.maximum.reduceat(hi[tri], offs).astype(np.float64),
-            )
-            cost = np.where(
-                (n_left > 0) & (n_right > 0),
-                np.nan_to_num(a_left * n_left + a_right * n_right, nan=np.inf),
-                np.inf,
-            ).reshape(len(ci), -1)
-            best = np.argmin(cost, axis=1)
-            best_cost = cost[np.arange(len(ci)), best]
-            split_axis[ci] = best // (n_bins - 1)
-            split_bin[ci] = best % (n_bins - 1)
-            split_cost[ci] = traversal_cost + best_cost / np.maximum(a_node, np.finfo(float).tiny)
-        leaf = (q_count <= max_leaf_size) & ((q_count <= 1) | (q_count <= split_cost))
-        median = ~leaf & ~np.isfinite(split_cost)  # all centroids coincide: split by index
-        # The root is an interior node even when everything fits in one leaf.
-        root_leaf = leaf & is_root
-        if np.any(root_leaf):
+        leaf = q_count <= max_leaf_size
+        if leaf[0] and is_root[0]:  # everything fits in one leaf under an interior root
             children[0, 0] = ~np.int32((q_start[0] << 3) | (q_count[0] - 1))
             boxes[0, 0:3], boxes[0, 3:6] = scene_lo, scene_hi
             break
@@ -228,51 +272,44 @@ def build_bvh(
         if len(li):
             codes = ~((q_start[li] << 3) | (q_count[li] - 1)).astype(np.int32)
             children[q_parent[li], q_side[li]] = codes
-        # ---- splits: new interior nodes, partition their ranges --------------------------
+        # ---- splits: new interior nodes ----------------------------------------------------
         si = np.nonzero(~leaf)[0]
         if not len(si):
             break
         new_ids = np.zeros(len(si), np.int64)
-        n_new = int(np.sum(~is_root[si]))
-        new_ids[~is_root[si]] = n_nodes + np.arange(n_new)
-        n_nodes += n_new
         nonroot = ~is_root[si]
+        new_ids[nonroot] = n_nodes + np.arange(int(nonroot.sum()))
+        n_nodes += int(nonroot.sum())
         children[q_parent[si][nonroot], q_side[si][nonroot]] = new_ids[nonroot]
+        n_left = np.zeros(len(si), np.int64)
+        big = q_count[si] > _SWEEP_MAX
+        if np.any(big):
+            bi = si[big]
+            n_left[big] = _split_binned(
+                order, q_start[bi], q_count[bi], q_clo[bi], q_chi[bi], cen, lohi, n_bins
+            )
+        if not np.all(big):
+            sm = si[~big]
+            n_left[~big] = _split_sweep(order, q_start[sm], q_count[sm], cen, lohi)
+        # ---- children ranges, in `order` sequence: [left_0, right_0, left_1, ...] ---------
         cnt = q_count[si]
-        item = np.repeat(np.arange(len(si)), cnt)
-        offs = np.concatenate([[0], np.cumsum(cnt)[:-1]])
-        pos = np.repeat(q_start[si] - offs, cnt) + np.arange(item.size)
-        tri = order[pos]
-        ax = split_axis[si][item]
-        ext = (q_chi[si] - q_clo[si])[item, ax]
-        sc = np.where(ext > 0, n_bins * (1.0 - 1e-12) / np.where(ext > 0, ext, 1.0), 0.0)
-        bin_ = np.clip(((cen[tri, ax] - q_clo[si][item, ax]) * sc).astype(np.int64), 0, n_bins - 1)
-        rank = np.arange(item.size) - offs[item]
-        go_left = np.where(median[si][item], rank < cnt[item] // 2, bin_ <= split_bin[si][item])
-        csum = np.cumsum(go_left)
-        before = np.concatenate([[0], csum])[offs]  # lefts before each range
-        n_l = np.add.reduceat(go_left.astype(np.int64), offs)
-        rank_l = csum - 1 - before[item]
-        rank_r = rank - (csum - before[item])
-        newpos = q_start[si][item] + np.where(go_left, rank_l, n_l[item] + rank_r)
-        order[newpos] = tri
-        # Children ranges, in `order` sequence: [left_0, right_0, left_1, right_1, ...].
-        c_start = np.stack([q_start[si], q_start[si] + n_l], 1).ravel()
-        c_count = np.stack([n_l, cnt - n_l], 1).ravel()
+        c_start = np.stack([q_start[si], q_start[si] + n_left], 1).ravel()
+        c_count = np.stack([n_left, cnt - n_left], 1).ravel()
         c_parent = np.repeat(new_ids, 2)
         c_side = np.tile([0, 1], len(si))
-        tri2 = order[pos]  # the same positions, now partitioned
         c_offs = np.concatenate([[0], np.cumsum(c_count)[:-1]])
-        c_lo = np.minimum.reduceat(lo[tri2], c_offs)
-        c_hi = np.maximum.reduceat(hi[tri2], c_offs)
-        c_clo = np.minimum.reduceat(cen[tri2], c_offs)
-        c_chi = np.maximum.reduceat(cen[tri2], c_offs)
+        pos = np.repeat(c_start - c_offs, c_count) + np.arange(int(c_count.sum()))
+        tri = order[pos]
+        c_lo = np.minimum.reduceat(lo[tri], c_offs)
+        c_hi = np.maximum.reduceat(hi[tri], c_offs)
+        c_cen = cen[tri]
+        q_clo = np.minimum.reduceat(c_cen, c_offs)
+        q_chi = np.maximum.reduceat(c_cen, c_offs)
         rows = np.repeat(c_parent, 3)
         cols_lo = (c_side[:, None] * 6 + np.arange(3)).ravel()
         boxes[rows, cols_lo] = c_lo.ravel()
         boxes[rows, cols_lo + 3] = c_hi.ravel()
         q_start, q_count, q_parent, q_side = c_start, c_count, c_parent, c_side
-        q_clo, q_chi = c_clo, c_chi
         depth += 1
     return BVH(
         node_boxes=jnp.asarray(boxes[:n_nodes]),

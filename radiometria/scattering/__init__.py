@@ -2,6 +2,7 @@
 
 - `_directions`: reflect / refract (thesis eq. 3.7-3.12), shading frames, spherical coordinates;
 - `_fresnel`: Fresnel equations for dielectrics and conductors (eq. 3.13-3.18), Schlick;
+- `_ior`: spectral indices of refraction (Sellmeier glasses and water, tabulated Au/Ag/Cu/Al);
 - `_microfacet`: the Trowbridge-Reitz (GGX) distribution with visible-normal sampling;
 - `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, smooth and
   rough conductor and dielectric, two-sided wrapper.
@@ -54,6 +55,15 @@ from ._fresnel import (
     fresnel_dielectric_transmittance as fresnel_dielectric_transmittance,
     fresnel_schlick as fresnel_schlick,
     fresnel_schlick_f0 as fresnel_schlick_f0,
+)
+from ._ior import (
+    CONDUCTORS as CONDUCTORS,
+    DIELECTRICS as DIELECTRICS,
+    TabulatedIOR as TabulatedIOR,
+    conductor_ior as conductor_ior,
+    dielectric_ior as dielectric_ior,
+    get_conductor as get_conductor,
+    sellmeier as sellmeier,
 )
 from ._microfacet import (
     TrowbridgeReitzDistribution as TrowbridgeReitzDistribution,

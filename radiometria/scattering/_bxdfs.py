@@ -54,7 +54,7 @@ from jax import Array
 from .._checks import as_float_array, check_choice, check_in_range
 from ._directions import _safe_sqrt
 from ._fresnel import _amplitudes, _check_eta, _check_k, _fr_conductor, _fr_dielectric
-from ._microfacet import TrowbridgeReitzDistribution, _check_alpha
+from ._microfacet import TrowbridgeReitzDistribution
 
 __all__ = [
     "AbstractBxDF",
@@ -96,7 +96,9 @@ def _spectral_pair(a: Array, b: Array) -> tuple[Array, Array]:
     try:
         shape = np.broadcast_shapes(a.shape, b.shape)
     except ValueError:
-        raise ValueError(f"Spectral parameters do not broadcast: {a.shape} and {b.shape}.") from None
+        raise ValueError(
+            f"Spectral parameters do not broadcast: {a.shape} and {b.shape}."
+        ) from None
     return jnp.broadcast_to(a, shape), jnp.broadcast_to(b, shape)
 
 
@@ -132,7 +134,7 @@ def _normalize3(x: Array, y: Array, z: Array) -> tuple[Array, Array, Array, Arra
 
 
 def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array]:
-    """Malley's method on Shirley-Chiu's concentric disk mapping (pbrt-v4 A.5.3); returns x, y, z >= 0."""
+    """Malley's method on the concentric disk mapping (pbrt-v4 A.5.3); returns x, y, z >= 0."""
     a = 2.0 * u0 - 1.0
     b = 2.0 * u1 - 1.0
     use_a = jnp.abs(a) > jnp.abs(b)
@@ -213,7 +215,7 @@ class AbstractBxDF(eqx.Module):
 
     @abc.abstractmethod
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
-        """Importance-sample `wi` given `wo`, with `u_lobe` `(...)` and `u2` `(..., 2)` in [0, 1)."""
+        """Importance-sample `wi` given `wo`; `u_lobe` `(...)`, `u2` `(..., 2)` in [0, 1)."""
 
     @abc.abstractmethod
     def pdf(self, wo, wi) -> Array:
@@ -296,7 +298,8 @@ class OrenNayarBxDF(AbstractBxDF):
     Two variants, chosen with the static `model` field:
 
     - `"qualitative"` (default): the qualitative model of `Oren1994` (pbrt-v3),
-      $$f = \frac{R}{\pi}\left(A + B\max(0, \cos(\varphi_i - \varphi_o))\sin\alpha\tan\beta\right),$$
+      $$f = \frac{R}{\pi}\left(A + B\max(0, \cos(\varphi_i - \varphi_o))
+        \sin\alpha\tan\beta\right),$$
       $$A = 1 - \frac{\sigma^2}{2(\sigma^2 + 0.33)},\quad B = \frac{0.45\sigma^2}{\sigma^2 + 0.09},
         \quad \alpha = \max(\theta_i,\theta_o),\ \beta = \min(\theta_i,\theta_o),$$
       with $\sigma$ the standard deviation of the facet slope angle in radians, [0, pi/2].
@@ -364,9 +367,7 @@ class OrenNayarBxDF(AbstractBxDF):
     def f(self, wo, wi, *, mode: str = "radiance") -> Array:
         _check_mode(mode)
         wo, wi = _dirs(("wo", wo), ("wi", wi))
-        _, (wo, wi, r, sigma) = _broadcast(
-            (wo, 1), (wi, 1), (self.reflectance, 1), (self.sigma, 0)
-        )
+        _, (wo, wi, r, sigma) = _broadcast((wo, 1), (wi, 1), (self.reflectance, 1), (self.sigma, 0))
         return self._value(wo, wi, r, sigma)
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
@@ -415,7 +416,8 @@ class ConductorBxDF(AbstractBxDF):
     **Fields:**
 
     - `eta`, `k`: relative complex index of refraction $\eta + i\kappa$ of the metal over the
-        outside medium, `(..., n_lambda)`, `eta > 0`, `k >= 0` (see `radiometria.scattering.ior`). [dimensionless]
+        outside medium, `(..., n_lambda)`, `eta > 0`, `k >= 0` (tabulated metals:
+        `radiometria.scattering.conductor_ior`). [dimensionless]
 
     !!! note "Thesis"
         Section 3.1 ("Perfectly Specular Reflection"), 3.1.1, eq. (3.7)-(3.8), (3.13)-(3.18).
@@ -578,10 +580,11 @@ def _check_masking(masking: str) -> str:
 
 
 class RoughConductorBxDF(AbstractBxDF):
-    r"""Rough conductor: Torrance-Sparrow microfacet BRDF with the Trowbridge-Reitz (GGX) distribution.
+    r"""Rough conductor: Torrance-Sparrow microfacet BRDF, Trowbridge-Reitz (GGX) distribution.
 
-    $$f(\omega_o, \omega_i) = \frac{D(\omega_h)\,F_r(|\omega_o\cdot\omega_h|)\,G(\omega_o, \omega_i)}
-      {4\,|\cos\theta_o|\,|\cos\theta_i|},\qquad \omega_h = \frac{\omega_o + \omega_i}{\|\omega_o + \omega_i\|}$$
+    $$f(\omega_o, \omega_i) = \frac{D(\omega_h)\,F_r(|\omega_o\cdot\omega_h|)\,
+      G(\omega_o, \omega_i)}{4\,|\cos\theta_o|\,|\cos\theta_i|},\qquad
+      \omega_h = \frac{\omega_o + \omega_i}{\|\omega_o + \omega_i\|}$$
 
     $F_r$ is the conductor Fresnel term (thesis eq. 3.13-3.18), $D$ the GGX distribution and
     $G$ Smith's masking-shadowing: height-correlated (`masking="height_correlated"`, pbrt-v4,
@@ -628,9 +631,7 @@ class RoughConductorBxDF(AbstractBxDF):
 
     def _value(self, wo, wi, d, eta, k) -> Array:
         zo, zi = wo[..., 2], wi[..., 2]
-        hx, hy, hz, nonzero = _normalize3(
-            wo[..., 0] + wi[..., 0], wo[..., 1] + wi[..., 1], zo + zi
-        )
+        hx, hy, hz, nonzero = _normalize3(wo[..., 0] + wi[..., 0], wo[..., 1] + wi[..., 1], zo + zi)
         wh = jnp.stack([hx, hy, hz], axis=-1)
         dot = jnp.abs(jnp.sum(wo * wh, axis=-1))
         F = _fr_conductor(dot[..., None], eta, k)
@@ -674,7 +675,7 @@ class RoughConductorBxDF(AbstractBxDF):
         wm = d.sample_wm(wo, u2)
         # wi = reflect(wo, wm)   (thesis eq. 3.8)
         wi = 2.0 * jnp.sum(wo * wm, axis=-1, keepdims=True) * wm - wo
-        ok = (wo[..., 2] * wi[..., 2] > 0)
+        ok = wo[..., 2] * wi[..., 2] > 0
         s = BSDFSample(
             f=self._value(wo, wi, d, eta, k),
             wi=wi,
@@ -915,9 +916,7 @@ class TwoSidedBxDF(AbstractBxDF):
         def pick(a, b):
             a, b = jnp.broadcast_arrays(a, b)
             m = jnp.reshape(back, back.shape + (1,) * (a.ndim - back.ndim))
-            m = jnp.broadcast_to(
-                jnp.reshape(m, (1,) * (a.ndim - m.ndim) + m.shape), a.shape
-            )
+            m = jnp.broadcast_to(jnp.reshape(m, (1,) * (a.ndim - m.ndim) + m.shape), a.shape)
             return jnp.where(m, b, a)
 
         return jax.tree_util.tree_map(pick, sf, sb)

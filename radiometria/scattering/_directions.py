@@ -146,7 +146,7 @@ def refract(wi, n, eta) -> tuple[Array, Array]:
     **Arguments:**
 
     - `wi`: incident direction `(..., 3)`, pointing away from the surface. [unit vector]
-    - `n`: normal `(..., 3)`, pointing out of the surface (towards the side of `eta_i`). [unit vector]
+    - `n`: normal `(..., 3)`, pointing out of the surface (to the side of `eta_i`). [unit vector]
     - `eta`: relative index of refraction $\eta_t/\eta_i$ of the side opposite to `n` over the
         side of `n`, shape broadcastable to `wi.shape[:-1]`, > 0. [dimensionless]
 
@@ -373,7 +373,8 @@ def spherical_direction(sin_theta, cos_theta, phi) -> Array:
 
     **Arguments:**
 
-    - `sin_theta`, `cos_theta`: sine and cosine of the polar angle (clamped to [-1, 1]). [dimensionless]
+    - `sin_theta`, `cos_theta`: sine and cosine of the polar angle (clamped to [-1, 1]).
+        [dimensionless]
     - `phi`: azimuth. [rad]
 
     **Returns:**
@@ -404,7 +405,7 @@ def spherical_phi(v) -> Array:
 
 
 def same_hemisphere(w, wp) -> Array:
-    """True where two local directions lie strictly on the same side of the surface (z > 0 or z < 0)."""
+    """True where two local directions lie strictly on the same side of the surface."""
     w = _direction(w, "w")
     wp = _direction(wp, "wp")
     a, b = _align(w[..., 2], wp[..., 2])

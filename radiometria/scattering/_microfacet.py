@@ -60,7 +60,8 @@ class TrowbridgeReitzDistribution(eqx.Module):
     **Fields:**
 
     - `alpha_x`, `alpha_y`: roughness along the tangent axes, in (0, 1] (values below 1e-4
-        are raised to 1e-4, as in Mitsuba). Shape `(...)`, broadcast against directions. [dimensionless]
+        are raised to 1e-4, as in Mitsuba). Shape `(...)`, broadcast against directions.
+        [dimensionless]
 
     !!! note "Thesis"
         Glossy reflection, section 3.1 (the thesis names the lobe types; the microfacet model
@@ -93,7 +94,7 @@ class TrowbridgeReitzDistribution(eqx.Module):
         return az, jnp.sqrt(z * z + (ax * x) ** 2 + (ay * y) ** 2)
 
     def lambda_(self, w) -> Array:
-        r"""Smith's auxiliary function $\Lambda(\omega) = (\sqrt{1 + \alpha^2\tan^2\theta} - 1)/2$; inf at grazing."""
+        r"""Smith's $\Lambda(\omega) = (\sqrt{1 + \alpha^2\tan^2\theta} - 1)/2$; inf at grazing."""
         az, r = self._sq_slope_term(w)
         ok = az > 0
         return jnp.where(ok, 0.5 * (r / jnp.where(ok, az, 1.0) - 1.0), jnp.inf)
@@ -110,7 +111,9 @@ class TrowbridgeReitzDistribution(eqx.Module):
         return jnp.where(ok, 2.0 * az / jnp.where(ok, den, 1.0), 0.0)
 
     def G(self, wo, wi) -> Array:
-        r"""Height-correlated masking-shadowing $G = 1/(1 + \Lambda(\omega_o) + \Lambda(\omega_i))$ (`Heitz2014`).
+        r"""Height-correlated masking-shadowing (`Heitz2014`).
+
+        $$G = 1/(1 + \Lambda(\omega_o) + \Lambda(\omega_i))$$
 
         Evaluated as $2|z_o||z_i|/(|z_i|\,r_o + |z_o|\,r_i)$ with
         $r = \sqrt{z^2 + \alpha_x^2 x^2 + \alpha_y^2 y^2}$, finite everywhere (0 at grazing).
@@ -123,7 +126,7 @@ class TrowbridgeReitzDistribution(eqx.Module):
         return jnp.where(ok, 2.0 * zo * zi / jnp.where(ok, den, 1.0), 0.0)
 
     def G_separable(self, wo, wi) -> Array:
-        """Separable (uncorrelated) Smith masking-shadowing $G_1(\\omega_o)G_1(\\omega_i)$, as in Mitsuba 3."""
+        """Separable Smith masking-shadowing $G_1(\\omega_o)G_1(\\omega_i)$ (Mitsuba 3)."""
         a, b = _align(self.G1(wo), self.G1(wi))
         return a * b
 
@@ -140,11 +143,11 @@ class TrowbridgeReitzDistribution(eqx.Module):
         return jnp.where(ok, g1 / jnp.where(ok, az, 1.0) * d * dot, 0.0)
 
     def pdf(self, w, wm) -> Array:
-        """Density of `sample_wm(w, u)` with respect to solid angle of $\\omega_m$: `D_visible`. [sr^-1]"""
+        """Solid-angle density of `sample_wm(w, u)` at `wm`: `D_visible`. [sr^-1]"""
         return self.D_visible(w, wm)
 
     def sample_wm(self, w, u) -> Array:
-        r"""Sample a visible microfacet normal for the direction `w` (`Heitz2018`, `Pharr2023` 9.6.4).
+        r"""Sample a visible microfacet normal for `w` (`Heitz2018`, `Pharr2023` 9.6.4).
 
         The hemisphere configuration: stretch `w` to the unit-roughness configuration, sample
         the projected area of the visible hemisphere (a disk with its lower half squashed by

@@ -261,6 +261,8 @@ class _Schedule:
     tolerance: float  # Delta E*ab
     allowed_fraction: float  # rows that may miss the tolerance before a step ends
     chunk: int
+    repair_capacity: int = 0  # entries refitted inside the compiled function
+    repair_steps: int = 20
 
 
 def _sweep_plan(res: int, k0: int) -> tuple[np.ndarray, np.ndarray]:
@@ -276,10 +278,12 @@ def _sweep_plan(res: int, k0: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _fit_columns(e, scale, k0, m, schedule: _Schedule):
-    """Coefficients (res, n, 3) and residuals (res, n) for the columns with directions e (n, 3).
+    """Coefficients (res, n, 3), residuals (res, n) and LM iterations (res,) for one block of
+    columns with directions e (n, 3).
 
     One `lax.scan` over the brightness nodes in `_sweep_plan` order (a single compiled
-    Gauss-Newton loop); row 0 (black) is a placeholder set by the caller.
+    Gauss-Newton loop), then the in-block repair; row 0 (black) is a placeholder that the
+    caller sets.
     """
     res = scale.shape[0]
     n = e.shape[0]
@@ -293,46 +297,91 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
         c_start = jnp.where(how == 0, 0.0, jnp.where(how == 1, c_prev, c_k0)).astype(dtype)
         lab_t = target_Lab(e * scale[k], m)
         n_it, s = lm_solve(
-            lm_init(c_start, lab_t, m, chunk=schedule.chunk),
+            lm_init(c_start, lab_t, m),
             lab_t,
             m,
             n_max,
             schedule.tolerance,
             min_steps=schedule.min_steps,
             allowed_fraction=schedule.allowed_fraction,
-            chunk=schedule.chunk,
         )
         c_k0 = jnp.where(how == 0, s.c, c_k0)
         return (s.c, c_k0), (s.c, jnp.sqrt(s.cost), n_it)
 
     zeros = jnp.zeros((n, 3), dtype)
-    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), (jnp.asarray(order), jnp.asarray(start), jnp.asarray(max_steps)))
-    # Scatter back to brightness order; row 0 = copy of row 1 (placeholder).
+    xs = (jnp.asarray(order), jnp.asarray(start), jnp.asarray(max_steps))
+    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), xs)
+    # Back to brightness order; row 0 = copy of row 1 (placeholder).
     inv = np.argsort(order)
-    coeffs = cs[inv]
-    resid = rs[inv]
-    coeffs = jnp.concatenate([coeffs[:1], coeffs], axis=0)
-    resid = jnp.concatenate([jnp.zeros_like(resid[:1]), resid], axis=0)
+    coeffs = jnp.concatenate([cs[inv][:1], cs[inv]], axis=0)
+    resid = jnp.concatenate([jnp.zeros_like(rs[:1]), rs[inv]], axis=0)
     iterations = jnp.concatenate([jnp.zeros_like(its[:1]), its[inv]], axis=0)
+    if schedule.repair_capacity > 0:
+        coeffs, resid = _repair_in_jit(coeffs, resid, e, scale, m, schedule)
     return coeffs, resid, iterations
 
 
-def _make_fit_fn(m: ModelArrays, scale, k0, schedule, mesh=None):
-    def fn(e):
-        return _fit_columns(e, scale, k0, m, schedule)
+def _repair_in_jit(coeffs, resid, e, scale, m, schedule: _Schedule):
+    """Refit the block's worst `repair_capacity` entries (fixed capacity: compiled once).
+
+    From their own state with `repair_steps` more iterations, then (the worst quarter of
+    those) from the solution one brightness node above, the other side of the sweep's
+    continuation. What is still above the tolerance goes to the host-side `_repair` (rare).
+    """
+    res, n = resid.shape
+    cap = min(schedule.repair_capacity, (res - 1) * n)
+
+    def refit(coeffs, resid, cap, k_offset):
+        _, idx = lax.top_k(resid.at[0].set(0.0).reshape(-1), cap)
+        ks, cols = idx // n, idx % n
+        ks_start = jnp.clip(ks + k_offset, 1, res - 1)
+        lab_t = target_Lab(e[cols] * scale[ks][:, None], m)
+        st = lm_iterate(lm_init(coeffs[ks_start, cols], lab_t, m), lab_t, m, schedule.repair_steps)
+        r_new = jnp.sqrt(st.cost)
+        better = r_new < resid[ks, cols]
+        coeffs = coeffs.at[ks, cols].set(jnp.where(better[:, None], st.c, coeffs[ks, cols]))
+        resid = resid.at[ks, cols].set(jnp.where(better, r_new, resid[ks, cols]))
+        return coeffs, resid
+
+    coeffs, resid = refit(coeffs, resid, cap, 0)
+    coeffs, resid = refit(coeffs, resid, max(1, cap // 4), 1)
+    return coeffs, resid
+
+
+def _make_fit_fn(m: ModelArrays, scale, k0, schedule: _Schedule, mesh=None):
+    """jit-compiled fit of all columns (n, 3) -> (coeffs (res, n, 3), resid (res, n), its).
+
+    The columns are processed in blocks of `schedule.chunk` by `lax.map` (cache blocking: each
+    block's (chunk, n_lambda) arrays stay in cache through the whole sweep), and with a `mesh`
+    the blocks are sharded over its devices (`jax.shard_map` over the column axis).
+    """
+    chunk = schedule.chunk
+
+    def blocks(e):
+        nb = e.shape[0] // chunk
+        c, r, it = lax.map(lambda eb: _fit_columns(eb, scale, k0, m, schedule), e.reshape(nb, chunk, 3))
+        res = scale.shape[0]
+        c = jnp.moveaxis(c, 0, 1).reshape(res, nb * chunk, 3)
+        r = jnp.moveaxis(r, 0, 1).reshape(res, nb * chunk)
+        return c, r, jnp.sum(it, axis=0)
 
     if mesh is None:
-        return jax.jit(fn)
+        return jax.jit(blocks)
     from jax.sharding import PartitionSpec as P
 
-    sharded = jax.shard_map(
-        fn, mesh=mesh, in_specs=P("columns"), out_specs=(P(None, "columns"), P(None, "columns"), P())
+    def sharded(e):
+        c, r, it = blocks(e)
+        return c, r, jax.lax.psum(it, "columns")
+
+    fn = jax.shard_map(
+        sharded, mesh=mesh, in_specs=P("columns"), out_specs=(P(None, "columns"), P(None, "columns"), P())
     )
-    return jax.jit(sharded)
+    return jax.jit(fn)
 
 
 def _repair(coeffs, resid, e, scale, m, tol, exact, n_steps, rounds, chunk):
-    """Refit entries above `tol` from their neighbours along brightness (host-driven rounds)."""
+    """Refit entries above `tol` from their neighbours along brightness (host-driven rounds,
+    after the in-block repair; usually nothing is left for it)."""
     res = scale.shape[0]
     n_repaired = 0
     lm = jax.jit(
@@ -346,7 +395,7 @@ def _repair(coeffs, resid, e, scale, m, tol, exact, n_steps, rounds, chunk):
             break
         n_repaired += ks.size
         # Bucket the batch size to limit recompilations.
-        size = 1 << int(np.ceil(np.log2(max(ks.size, 64))))
+        size = 1 << int(np.ceil(np.log2(max(ks.size, 256))))
         targets = np.asarray(e)[cols] * np.asarray(scale)[ks][:, None]
         best_c = coeffs[ks, cols].copy()
         best_r = resid[ks, cols].copy()
@@ -381,9 +430,11 @@ def fit_lut(
     n_steps: int = 12,
     min_steps: int = 2,
     allowed_fraction: float = 1e-3,
-    repair_steps: int = 60,
+    repair_fraction: float = 1 / 64,
+    repair_steps: int = 20,
     repair_rounds: int = 3,
     chunk: int = 512,
+    blocks_per_call: int = 2,
     step_nm: float = 1.0,
     devices=None,
     progress=None,
@@ -406,8 +457,10 @@ def fit_lut(
     - `n_first`, `n_steps`: most Gauss-Newton iterations for the cold start and per
         brightness step; `min_steps`: fewest per step; a step ends early once no more than
         `allowed_fraction` of the columns miss the tolerance (those go to the repair pass);
-        `repair_steps`, `repair_rounds`: the repair pass.
-    - `chunk`: colours per vectorised block (cache blocking).
+        `repair_fraction`, `repair_steps`: capacity (fraction of a block's entries) and
+        iterations of the in-block repair; `repair_rounds`: host-side repair rounds after it.
+    - `chunk`: table columns per vectorised block (cache blocking); `blocks_per_call`:
+        blocks per device per compiled call (the granularity of `progress`).
     - `step_nm`: quadrature step of the forward model (1 nm default). [nm]
     - `devices`: sequence of devices to shard the columns over (None: default device).
     - `progress`: optional callable `progress(stage: str, done: int, total: int)`.
@@ -435,6 +488,11 @@ def fit_lut(
     scale_np = brightness_scale(res)
     scale = jnp.asarray(scale_np, dtype)
     k0 = max(1, res // 5)
+    e_np = _column_directions(res, np.float64)
+    n_cols = e_np.shape[0]
+    n_dev = 1 if devices is None else len(devices)
+    chunk = check_positive_int(chunk, "chunk")
+    chunk = min(chunk, -(-n_cols // n_dev))
     schedule = _Schedule(
         n_first=n_first,
         n_steps=n_steps,
@@ -442,32 +500,41 @@ def fit_lut(
         tolerance=float(tolerance),
         allowed_fraction=float(allowed_fraction),
         chunk=chunk,
+        repair_capacity=int(round(repair_fraction * chunk * (res - 1))),
+        repair_steps=repair_steps,
     )
-    e_np = _column_directions(res, np.float64)
-    n_cols = e_np.shape[0]
-
     mesh = None
-    n_dev = 1
-    if devices is not None and len(devices) > 1:
+    if n_dev > 1:
         from jax.sharding import Mesh
 
         mesh = Mesh(np.asarray(devices), ("columns",))
-        n_dev = len(devices)
-    pad = (-n_cols) % (n_dev * min(chunk, max(1, n_cols // n_dev)))
+    # Work in groups of blocks (one compiled call each) so progress can be reported.
+    per_call = n_dev * chunk * blocks_per_call
+    n_calls = -(-n_cols // per_call)
+    pad = n_calls * per_call - n_cols
     e_pad = np.concatenate([e_np, np.tile(e_np[:1], (pad, 1))]) if pad else e_np
-    e = jnp.asarray(e_pad, dtype)
+    fit_fn = _make_fit_fn(m, scale, k0, schedule, mesh)
+    sharding = None
     if mesh is not None:
         from jax.sharding import NamedSharding, PartitionSpec as P
 
-        e = jax.device_put(e, NamedSharding(mesh, P("columns")))
-    fit_fn = _make_fit_fn(m, scale, k0, schedule, mesh)
+        sharding = NamedSharding(mesh, P("columns"))
+    parts_c, parts_r = [], []
+    iterations = np.zeros(res, np.int64)
     if progress is not None:
-        progress("sweep", 0, 1)
-    coeffs, resid, iterations = fit_fn(e)
-    coeffs = np.array(coeffs)[:, :n_cols]  # (res, n_cols, 3), normalised
-    resid = np.array(resid)[:, :n_cols]
-    if progress is not None:
-        progress("sweep", 1, 1)
+        progress("sweep", 0, n_cols)
+    for i in range(n_calls):
+        e = jnp.asarray(e_pad[i * per_call : (i + 1) * per_call], dtype)
+        if sharding is not None:
+            e = jax.device_put(e, sharding)
+        c, r, it = fit_fn(e)
+        parts_c.append(np.asarray(c))
+        parts_r.append(np.asarray(r))
+        iterations += np.asarray(it)
+        if progress is not None:
+            progress("sweep", min((i + 1) * per_call, n_cols), n_cols)
+    coeffs = np.concatenate(parts_c, axis=1)[:, :n_cols]  # (res, n_cols, 3), normalised
+    resid = np.concatenate(parts_r, axis=1)[:, :n_cols]
 
     # Explicit entries: greys (closed form), white (finite), black row (copy of row 1).
     exact = np.zeros((res, n_cols), dtype=bool)
@@ -481,7 +548,7 @@ def fit_lut(
         exact[:, col] = True
     coeffs, resid, n_repaired = _repair(
         coeffs, resid, e_np.astype(dtype), scale_np.astype(dtype), m, tolerance, exact,
-        repair_steps, repair_rounds, chunk,
+        3 * repair_steps, repair_rounds, None,
     )  # fmt: skip
     if progress is not None:
         progress("repair", 1, 1)
@@ -507,7 +574,9 @@ def fit_lut(
         "n_steps": n_steps,
         "min_steps": min_steps,
         "allowed_fraction": allowed_fraction,
+        "repair_fraction": repair_fraction,
         "repair_steps": repair_steps,
+        "chunk": chunk,
         "repair_rounds": repair_rounds,
         "start_index": k0,
         "white_c2": WHITE_C2,

@@ -14,7 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import radiometria.scattering as S
+import radiometria.scattering as sc
 from radiometria.montecarlo import chi2_test
 
 N_CHI2 = 100_000
@@ -58,8 +58,15 @@ def _defective_chi2(bxdf, wo, *, key, n_tests=1, resolution=None):
         return pdf(w) + p_fail / (4 * jnp.pi)
 
     return chi2_test(
-        sample, claimed, domain="sphere", n_samples=N_CHI2, key=key, u_dim=5,
-        n_tests=n_tests, resolution=resolution, quadrature=32,
+        sample,
+        claimed,
+        domain="sphere",
+        n_samples=N_CHI2,
+        key=key,
+        u_dim=5,
+        n_tests=n_tests,
+        resolution=resolution,
+        quadrature=32,
     )
 
 
@@ -70,19 +77,21 @@ def _defective_chi2(bxdf, wo, *, key, n_tests=1, resolution=None):
 def _rough_cases():
     cases = []
     for theta in [0.0, 0.6, 1.2, 1.5]:
-        cases.append(("diffuse", theta, S.DiffuseBxDF(jnp.array([0.5, 0.8]))))
-        cases.append(("oren_nayar", theta, S.OrenNayarBxDF(jnp.array([0.5]), 0.4)))
-        cases.append(("oren_nayar_fujii", theta, S.OrenNayarBxDF(0.5, 0.8, model="fujii")))
+        cases.append(("diffuse", theta, sc.DiffuseBxDF(jnp.array([0.5, 0.8]))))
+        cases.append(("oren_nayar", theta, sc.OrenNayarBxDF(jnp.array([0.5]), 0.4)))
+        cases.append(("oren_nayar_fujii", theta, sc.OrenNayarBxDF(0.5, 0.8, model="fujii")))
         for alpha in [0.1, 0.5]:
-            cases.append((f"conductor_a{alpha}", theta, S.RoughConductorBxDF(alpha, 0.2, 3.0)))
-        cases.append(("conductor_aniso", theta, S.RoughConductorBxDF(0.1, 1.3, 2.0, alpha_y=0.5)))
+            cases.append((f"conductor_a{alpha}", theta, sc.RoughConductorBxDF(alpha, 0.2, 3.0)))
+        cases.append(("conductor_aniso", theta, sc.RoughConductorBxDF(0.1, 1.3, 2.0, alpha_y=0.5)))
     return cases
 
 
 ROUGH_CASES = _rough_cases()
 
 
-@pytest.mark.parametrize("name,theta,bxdf", ROUGH_CASES, ids=[f"{c[0]}-{c[1]}" for c in ROUGH_CASES])
+@pytest.mark.parametrize(
+    "name,theta,bxdf", ROUGH_CASES, ids=[f"{c[0]}-{c[1]}" for c in ROUGH_CASES]
+)
 def test_bxdf_reflection_sampling_chi2(name, theta, bxdf):
     res = _defective_chi2(bxdf, _dir(theta), key=jax.random.key(1), n_tests=len(ROUGH_CASES))
     assert res.passed, res.message
@@ -98,14 +107,14 @@ DIELECTRIC_CASES = [
 
 @pytest.mark.parametrize("theta,alpha,eta", DIELECTRIC_CASES)
 def test_rough_dielectric_sampling_chi2(theta, alpha, eta):
-    bxdf = S.RoughDielectricBxDF(alpha, eta)
+    bxdf = sc.RoughDielectricBxDF(alpha, eta)
     res = _defective_chi2(bxdf, _dir(theta), key=jax.random.key(2), n_tests=len(DIELECTRIC_CASES))
     assert res.passed, res.message
 
 
 @pytest.mark.parametrize("theta", [0.3, 1.2, np.pi - 0.5])
 def test_two_sided_sampling_chi2(theta):
-    bxdf = S.TwoSidedBxDF(S.DiffuseBxDF(0.5), S.RoughConductorBxDF(0.3, 0.2, 3.0))
+    bxdf = sc.TwoSidedBxDF(sc.DiffuseBxDF(0.5), sc.RoughConductorBxDF(0.3, 0.2, 3.0))
     res = _defective_chi2(bxdf, _dir(theta), key=jax.random.key(3), n_tests=3)
     assert res.passed, res.message
 
@@ -117,12 +126,12 @@ def test_two_sided_sampling_chi2(theta):
 @pytest.mark.parametrize("theta", [0.0, 0.8, 1.4, np.pi - 0.3, np.pi - 0.9])
 @pytest.mark.parametrize("eta", [1.5, 1.33])
 def test_smooth_dielectric_lobe_probabilities(theta, eta):
-    bxdf = S.DielectricBxDF(eta)
+    bxdf = sc.DielectricBxDF(eta)
     wo = _dir(theta)
     n = 200_000
     u = jax.random.uniform(jax.random.key(4), (n, 3))
     s = jax.jit(lambda u: bxdf.sample_f(wo, u[:, 0], u[:, 1:]))(u)
-    R = float(S.fresnel_dielectric(wo[2], eta))
+    R = float(sc.fresnel_dielectric(wo[2], eta))
     frac = float(jnp.mean(~s.is_transmission))
     # 6 sigma binomial bound (false failure rate << 1e-6 over all cases)
     assert abs(frac - R) <= 6 * np.sqrt(max(R * (1 - R), 1e-12) / n) + 1e-12
@@ -130,7 +139,7 @@ def test_smooth_dielectric_lobe_probabilities(theta, eta):
     assert bool(jnp.all(s.is_delta))
     # Specular directions: reflection mirrors, transmission obeys Snell.
     wr = wo * jnp.array([-1.0, -1.0, 1.0])
-    wt, _ = S.refract(wo, jnp.array([0.0, 0.0, 1.0]), eta)
+    wt, _ = sc.refract(wo, jnp.array([0.0, 0.0, 1.0]), eta)
     expect = jnp.where(s.is_transmission[:, None], wt[None], wr[None])
     np.testing.assert_allclose(s.wi, expect, atol=1e-12)
 
@@ -148,13 +157,13 @@ def _random_dirs(key, n, upper=None):
 
 
 NONDELTA = [
-    S.DiffuseBxDF(jnp.array([0.2, 0.5, 0.7, 0.9])),
-    S.OrenNayarBxDF(jnp.array([0.2, 0.5, 0.7, 0.9]), 0.5),
-    S.RoughConductorBxDF(0.3, jnp.array([0.2, 0.5, 1.1, 1.3]), jnp.array([3.0, 2.5, 2.0, 1.0])),
-    S.RoughConductorBxDF(0.2, 0.2, 3.0, alpha_y=0.6, masking="separable"),
-    S.RoughDielectricBxDF(0.3, 1.5),
-    S.RoughDielectricBxDF(0.4, jnp.array([1.5, 1.5, 1.5, 1.5]), masking="separable"),
-    S.TwoSidedBxDF(S.DiffuseBxDF(0.3), S.OrenNayarBxDF(0.7, 0.3)),
+    sc.DiffuseBxDF(jnp.array([0.2, 0.5, 0.7, 0.9])),
+    sc.OrenNayarBxDF(jnp.array([0.2, 0.5, 0.7, 0.9]), 0.5),
+    sc.RoughConductorBxDF(0.3, jnp.array([0.2, 0.5, 1.1, 1.3]), jnp.array([3.0, 2.5, 2.0, 1.0])),
+    sc.RoughConductorBxDF(0.2, 0.2, 3.0, alpha_y=0.6, masking="separable"),
+    sc.RoughDielectricBxDF(0.3, 1.5),
+    sc.RoughDielectricBxDF(0.4, jnp.array([1.5, 1.5, 1.5, 1.5]), masking="separable"),
+    sc.TwoSidedBxDF(sc.DiffuseBxDF(0.3), sc.OrenNayarBxDF(0.7, 0.3)),
 ]
 
 
@@ -181,12 +190,12 @@ def test_bxdf_sample_consistent_with_f_and_pdf(bxdf):
 
 
 REFLECTIVE = [
-    S.DiffuseBxDF(jnp.array([0.3, 0.9])),
-    S.OrenNayarBxDF(jnp.array([0.3, 0.9]), 0.6),
-    S.OrenNayarBxDF(jnp.array([0.3, 0.9]), 0.6, model="fujii"),
-    S.RoughConductorBxDF(0.25, jnp.array([0.2, 1.2]), jnp.array([3.0, 0.5])),
-    S.RoughConductorBxDF(0.1, 0.2, 3.0, alpha_y=0.4, masking="separable"),
-    S.RoughDielectricBxDF(0.3, 1.5),
+    sc.DiffuseBxDF(jnp.array([0.3, 0.9])),
+    sc.OrenNayarBxDF(jnp.array([0.3, 0.9]), 0.6),
+    sc.OrenNayarBxDF(jnp.array([0.3, 0.9]), 0.6, model="fujii"),
+    sc.RoughConductorBxDF(0.25, jnp.array([0.2, 1.2]), jnp.array([3.0, 0.5])),
+    sc.RoughConductorBxDF(0.1, 0.2, 3.0, alpha_y=0.4, masking="separable"),
+    sc.RoughDielectricBxDF(0.3, 1.5),
 ]
 
 
@@ -202,7 +211,7 @@ def test_bxdf_reciprocity(bxdf):
 def test_rough_dielectric_transmission_generalised_reciprocity(eta):
     # Veach (1997) eq. 5.14: f_t(wo, wi) / eta_o^2 = f_t(wi, wo) / eta_i^2 (radiance transport),
     # and the importance-transport BTDF is the adjoint f*(wo, wi) = f(wi, wo).
-    bxdf = S.RoughDielectricBxDF(0.3, eta)
+    bxdf = sc.RoughDielectricBxDF(0.3, eta)
     k1, k2 = jax.random.split(jax.random.key(7))
     wo = _random_dirs(k1, 500, upper=True)
     wi = -_random_dirs(k2, 500, upper=True)
@@ -211,7 +220,9 @@ def test_rough_dielectric_transmission_generalised_reciprocity(eta):
     assert float(jnp.max(f_oi)) > 0
     eta_o, eta_i = 1.0, eta  # wo outside, wi inside
     np.testing.assert_allclose(f_oi / eta_o**2, f_io / eta_i**2, rtol=1e-10, atol=1e-14)
-    np.testing.assert_allclose(bxdf.f(wo, wi, mode="importance"), bxdf.f(wi, wo), rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(
+        bxdf.f(wo, wi, mode="importance"), bxdf.f(wi, wo), rtol=1e-10, atol=1e-14
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -229,11 +240,11 @@ def _albedo(bxdf, wo, n=200_000, mode="importance", key=8):
 def test_white_furnace_diffuse_and_smooth(theta):
     wo = _dir(theta)
     # Lambertian with R = 1 and a smooth conductor with F = 1 (k -> inf) conserve energy exactly.
-    m, _ = _albedo(S.DiffuseBxDF(1.0), wo, n=1000)
+    m, _ = _albedo(sc.DiffuseBxDF(1.0), wo, n=1000)
     np.testing.assert_allclose(m, 1.0, rtol=1e-12)
     # A smooth dielectric reflects + transmits all flux (R + T = 1) for either side.
     for w in (wo, -wo):
-        m, se = _albedo(S.DielectricBxDF(1.5), w, n=20_000)
+        m, se = _albedo(sc.DielectricBxDF(1.5), w, n=20_000)
         np.testing.assert_allclose(m, 1.0, rtol=1e-12)
 
 
@@ -242,19 +253,19 @@ def test_white_furnace_diffuse_and_smooth(theta):
 def test_white_furnace_rough_albedo_at_most_one(theta, alpha):
     wo = _dir(theta)
     bxdfs = [
-        S.RoughConductorBxDF(alpha, 1.0, 1e4),  # |F| ~ 1: pure masking-shadowing loss
-        S.RoughDielectricBxDF(alpha, 1.5),
-        S.OrenNayarBxDF(1.0, alpha, model="fujii"),
+        sc.RoughConductorBxDF(alpha, 1.0, 1e4),  # |F| ~ 1: pure masking-shadowing loss
+        sc.RoughDielectricBxDF(alpha, 1.5),
+        sc.OrenNayarBxDF(1.0, alpha, model="fujii"),
     ]
     for b in bxdfs:
         m, se = _albedo(b, wo, n=100_000)
         assert float(m[0]) <= 1 + 6 * float(se[0]) + 1e-9, (type(b).__name__, m, se)
     # The qualitative Oren-Nayar fit exceeds 1 by at most about 0.5 % (documented).
-    m, se = _albedo(S.OrenNayarBxDF(1.0, alpha * np.pi / 2), wo, n=100_000)
+    m, se = _albedo(sc.OrenNayarBxDF(1.0, alpha * np.pi / 2), wo, n=100_000)
     assert float(m[0]) <= 1.006 + 6 * float(se[0]), (m, se)
     # Nearly smooth microfacets at normal incidence lose almost nothing.
     if alpha == 0.05 and theta == 0.0:
-        m, se = _albedo(S.RoughConductorBxDF(alpha, 1.0, 1e4), wo, n=100_000)
+        m, se = _albedo(sc.RoughConductorBxDF(alpha, 1.0, 1e4), wo, n=100_000)
         assert float(m[0]) > 0.995
 
 
@@ -262,11 +273,13 @@ def test_diffuse_lambert_cosine_law():
     # f is constant, so the reflected radiance is the same in every direction and the radiant
     # intensity of a patch goes as cos(theta_o) (Lambert); the directional-hemispherical
     # reflectance is R for every incident direction.
-    b = S.DiffuseBxDF(jnp.array([0.25, 0.75]))
+    b = sc.DiffuseBxDF(jnp.array([0.25, 0.75]))
     k1, k2 = jax.random.split(jax.random.key(9))
     wo = _random_dirs(k1, 300, upper=True)
     wi = _random_dirs(k2, 300, upper=True)
-    np.testing.assert_allclose(b.f(wo, wi), jnp.broadcast_to(jnp.array([0.25, 0.75]) / np.pi, (300, 2)))
+    np.testing.assert_allclose(
+        b.f(wo, wi), jnp.broadcast_to(jnp.array([0.25, 0.75]) / np.pi, (300, 2))
+    )
     np.testing.assert_allclose(b.pdf(wo, wi), wi[:, 2] / np.pi)
     for theta in [0.1, 0.9, 1.5]:
         m, _ = _albedo(b, _dir(theta), n=100)
@@ -279,16 +292,18 @@ def test_oren_nayar_reduces_to_lambert():
     wi = _random_dirs(k2, 200, upper=True)
     for model in ("qualitative", "fujii"):
         np.testing.assert_allclose(
-            S.OrenNayarBxDF(0.6, 0.0, model=model).f(wo, wi), S.DiffuseBxDF(0.6).f(wo, wi), rtol=1e-14
+            sc.OrenNayarBxDF(0.6, 0.0, model=model).f(wo, wi),
+            sc.DiffuseBxDF(0.6).f(wo, wi),
+            rtol=1e-14,
         )
 
 
 def test_smooth_conductor_sample():
-    b = S.ConductorBxDF(jnp.array([0.2, 1.1]), jnp.array([3.0, 0.0]))
+    b = sc.ConductorBxDF(jnp.array([0.2, 1.1]), jnp.array([3.0, 0.0]))
     wo = _dir(0.7)
     s = b.sample_f(wo, 0.5, jnp.array([0.1, 0.2]))
     np.testing.assert_allclose(s.wi, wo * jnp.array([-1.0, -1.0, 1.0]), atol=1e-15)
-    F = S.fresnel_conductor(np.cos(0.7), jnp.array([0.2, 1.1]), jnp.array([3.0, 0.0]))
+    F = sc.fresnel_conductor(np.cos(0.7), jnp.array([0.2, 1.1]), jnp.array([3.0, 0.0]))
     np.testing.assert_allclose(s.weight(), F, rtol=1e-12)
     assert bool(s.is_delta) and float(s.pdf) == 1.0
     assert float(jnp.max(jnp.abs(b.f(wo, s.wi)))) == 0 and float(b.pdf(wo, s.wi)) == 0
@@ -296,27 +311,29 @@ def test_smooth_conductor_sample():
 
 def test_conductor_with_zero_k_equals_dielectric_reflection():
     wo = _dir(0.9)
-    c = S.ConductorBxDF(1.5, 0.0).sample_f(wo, 0.0, jnp.zeros(2))
-    d = S.DielectricBxDF(1.5).sample_f(wo, 0.0, jnp.zeros(2))  # u_lobe = 0: reflection
+    c = sc.ConductorBxDF(1.5, 0.0).sample_f(wo, 0.0, jnp.zeros(2))
+    d = sc.DielectricBxDF(1.5).sample_f(wo, 0.0, jnp.zeros(2))  # u_lobe = 0: reflection
     np.testing.assert_allclose(c.f, d.f, rtol=1e-13)
     wi = _random_dirs(jax.random.key(11), 100, upper=True)
     np.testing.assert_allclose(
-        S.RoughConductorBxDF(0.3, 1.5, 0.0).f(wo, wi), S.RoughDielectricBxDF(0.3, 1.5).f(wo, wi), rtol=1e-12
+        sc.RoughConductorBxDF(0.3, 1.5, 0.0).f(wo, wi),
+        sc.RoughDielectricBxDF(0.3, 1.5).f(wo, wi),
+        rtol=1e-12,
     )
 
 
 def test_smooth_dielectric_radiance_factor_and_dispersion():
     wo = _dir(0.5)
     eta = 1.5
-    s = S.DielectricBxDF(eta).sample_f(wo, 0.999, jnp.zeros(2))  # transmission
-    T = 1 - S.fresnel_dielectric(np.cos(0.5), eta)
+    s = sc.DielectricBxDF(eta).sample_f(wo, 0.999, jnp.zeros(2))  # transmission
+    T = 1 - sc.fresnel_dielectric(np.cos(0.5), eta)
     assert bool(s.is_transmission) and not bool(s.terminate_secondary)
     np.testing.assert_allclose(s.weight(), T / eta**2 / T, rtol=1e-12)
-    s_imp = S.DielectricBxDF(eta).sample_f(wo, 0.999, jnp.zeros(2), mode="importance")
+    s_imp = sc.DielectricBxDF(eta).sample_f(wo, 0.999, jnp.zeros(2), mode="importance")
     np.testing.assert_allclose(s_imp.weight(), 1.0, rtol=1e-12)
     np.testing.assert_allclose(s.eta, eta)
     # Dispersion: hero wavelength only after a transmission, all wavelengths after reflection.
-    b = S.DielectricBxDF(jnp.array([1.52, 1.51, 1.50, 1.49]))
+    b = sc.DielectricBxDF(jnp.array([1.52, 1.51, 1.50, 1.49]))
     st = b.sample_f(wo, 0.999, jnp.zeros(2))
     assert bool(st.terminate_secondary)
     assert float(st.f[0]) > 0 and np.all(np.asarray(st.f[1:]) == 0)
@@ -326,12 +343,14 @@ def test_smooth_dielectric_radiance_factor_and_dispersion():
 
 def test_rough_dielectric_dispersion_evaluates_per_wavelength():
     etas = jnp.array([1.4, 1.5, 1.6])
-    b = S.RoughDielectricBxDF(0.3, etas)
+    b = sc.RoughDielectricBxDF(0.3, etas)
     wo = _random_dirs(jax.random.key(12), 50, upper=True)
     wi = -_random_dirs(jax.random.key(13), 50, upper=True)
     f = b.f(wo, wi)
     for j, e in enumerate([1.4, 1.5, 1.6]):
-        np.testing.assert_allclose(f[:, j], S.RoughDielectricBxDF(0.3, e).f(wo, wi)[:, 0], rtol=1e-12)
+        np.testing.assert_allclose(
+            f[:, j], sc.RoughDielectricBxDF(0.3, e).f(wo, wi)[:, 0], rtol=1e-12
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -342,14 +361,14 @@ def test_bxdf_broadcasting_shapes():
     n = 7
     wo = _random_dirs(jax.random.key(14), n, upper=True)
     wi = _random_dirs(jax.random.key(15), n, upper=True)
-    per_hit = S.DiffuseBxDF(jnp.full((n, 4), 0.5))
-    shared = S.DiffuseBxDF(jnp.full((4,), 0.5))
+    per_hit = sc.DiffuseBxDF(jnp.full((n, 4), 0.5))
+    shared = sc.DiffuseBxDF(jnp.full((4,), 0.5))
     for b in (per_hit, shared):
         assert b.f(wo, wi).shape == (n, 4)
         assert b.pdf(wo, wi).shape == (n,)
         s = b.sample_f(wo, jnp.zeros(n), jnp.full((n, 2), 0.3))
         assert s.f.shape == (n, 4) and s.wi.shape == (n, 3) and s.pdf.shape == (n,)
-    rc = S.RoughConductorBxDF(jnp.full((n,), 0.3), jnp.ones(4), jnp.ones(4))
+    rc = sc.RoughConductorBxDF(jnp.full((n,), 0.3), jnp.ones(4), jnp.ones(4))
     assert rc.f(wo, wi).shape == (n, 4) and rc.pdf(wo, wi).shape == (n,)
     assert rc.sample_f(wo, jnp.zeros(n), jnp.full((n, 2), 0.3)).f.shape == (n, 4)
     with pytest.raises(ValueError, match="shapes"):
@@ -362,7 +381,11 @@ def test_bxdf_broadcasting_shapes():
         shared.f(wo, wi, mode="potential")
 
 
-@pytest.mark.parametrize("bxdf", NONDELTA[:5] + [S.DielectricBxDF(1.5), S.ConductorBxDF(0.2, 3.0)], ids=lambda b: type(b).__name__)
+@pytest.mark.parametrize(
+    "bxdf",
+    NONDELTA[:5] + [sc.DielectricBxDF(1.5), sc.ConductorBxDF(0.2, 3.0)],
+    ids=lambda b: type(b).__name__,
+)
 def test_bxdf_jit_and_vmap_match_eager(bxdf):
     wo = _random_dirs(jax.random.key(16), 8)
     wi = _random_dirs(jax.random.key(17), 8)
@@ -370,7 +393,9 @@ def test_bxdf_jit_and_vmap_match_eager(bxdf):
     eager = bxdf.sample_f(wo, u[:, 0], u[:, 1:])
     jitted = eqx.filter_jit(lambda b, wo, u: b.sample_f(wo, u[:, 0], u[:, 1:]))(bxdf, wo, u)
     vm = jax.vmap(lambda wo, u: bxdf.sample_f(wo, u[0], u[1:]))(wo, u)
-    for a, b, c in zip(jax.tree.leaves(eager), jax.tree.leaves(jitted), jax.tree.leaves(vm), strict=True):
+    for a, b, c in zip(
+        jax.tree.leaves(eager), jax.tree.leaves(jitted), jax.tree.leaves(vm), strict=True
+    ):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-14)
         np.testing.assert_allclose(a, c, rtol=1e-10, atol=1e-14)
     f_jit = eqx.filter_jit(lambda b, wo, wi: b.f(wo, wi))(bxdf, wo, wi)
@@ -397,12 +422,12 @@ def test_bxdf_gradients_finite_at_edges(where):
     def loss(params, wo):
         alpha, eta, k, r = params
         bs = [
-            S.DiffuseBxDF(r),
-            S.OrenNayarBxDF(r, alpha),
-            S.RoughConductorBxDF(alpha, eta, k),
-            S.RoughDielectricBxDF(alpha, eta),
-            S.DielectricBxDF(eta),
-            S.ConductorBxDF(eta, k),
+            sc.DiffuseBxDF(r),
+            sc.OrenNayarBxDF(r, alpha),
+            sc.RoughConductorBxDF(alpha, eta, k),
+            sc.RoughDielectricBxDF(alpha, eta),
+            sc.DielectricBxDF(eta),
+            sc.ConductorBxDF(eta, k),
         ]
         tot = 0.0
         for b in bs:
@@ -419,40 +444,44 @@ def test_bxdf_gradients_finite_at_edges(where):
 
 def test_bxdf_rejects_out_of_range_parameters():
     bad = [
-        lambda: S.DiffuseBxDF(1.2),
-        lambda: S.DiffuseBxDF(jnp.array([0.5, -0.1])),
-        lambda: S.OrenNayarBxDF(0.5, -0.1),
-        lambda: S.OrenNayarBxDF(0.5, 2.0),
-        lambda: S.OrenNayarBxDF(0.5, 1.2, model="fujii"),
-        lambda: S.ConductorBxDF(-0.2, 3.0),
-        lambda: S.ConductorBxDF(0.2, -3.0),
-        lambda: S.DielectricBxDF(0.0),
-        lambda: S.RoughConductorBxDF(0.0, 0.2, 3.0),
-        lambda: S.RoughConductorBxDF(1.5, 0.2, 3.0),
-        lambda: S.RoughDielectricBxDF(0.3, 1.5, alpha_y=-0.1),
-        lambda: S.RoughDielectricBxDF(0.3, -1.5),
+        lambda: sc.DiffuseBxDF(1.2),
+        lambda: sc.DiffuseBxDF(jnp.array([0.5, -0.1])),
+        lambda: sc.OrenNayarBxDF(0.5, -0.1),
+        lambda: sc.OrenNayarBxDF(0.5, 2.0),
+        lambda: sc.OrenNayarBxDF(0.5, 1.2, model="fujii"),
+        lambda: sc.ConductorBxDF(-0.2, 3.0),
+        lambda: sc.ConductorBxDF(0.2, -3.0),
+        lambda: sc.DielectricBxDF(0.0),
+        lambda: sc.RoughConductorBxDF(0.0, 0.2, 3.0),
+        lambda: sc.RoughConductorBxDF(1.5, 0.2, 3.0),
+        lambda: sc.RoughDielectricBxDF(0.3, 1.5, alpha_y=-0.1),
+        lambda: sc.RoughDielectricBxDF(0.3, -1.5),
     ]
     for make in bad:
         with pytest.raises(eqx.EquinoxRuntimeError):
             make()
     with pytest.raises(eqx.EquinoxRuntimeError, match="eta"):
-        eqx.filter_jit(lambda e: S.DielectricBxDF(e).sample_f(_dir(0.2), 0.5, jnp.zeros(2)))(jnp.array(-1.0))
+        eqx.filter_jit(lambda e: sc.DielectricBxDF(e).sample_f(_dir(0.2), 0.5, jnp.zeros(2)))(
+            jnp.array(-1.0)
+        )
     with pytest.raises(ValueError, match="masking"):
-        S.RoughConductorBxDF(0.3, 0.2, 3.0, masking="vcavity")
+        sc.RoughConductorBxDF(0.3, 0.2, 3.0, masking="vcavity")
     with pytest.raises(ValueError, match="broadcast"):
-        S.ConductorBxDF(jnp.ones(3), jnp.ones(4))
+        sc.ConductorBxDF(jnp.ones(3), jnp.ones(4))
     with pytest.raises(TypeError, match="front"):
-        S.TwoSidedBxDF("diffuse")
+        sc.TwoSidedBxDF("diffuse")
 
 
 def test_bxdf_float32():
     wo = _random_dirs(jax.random.key(19), 64, upper=True).astype(jnp.float32)
     u = jax.random.uniform(jax.random.key(20), (64, 3), dtype=jnp.float32)
     for b in [
-        S.DiffuseBxDF(jnp.float32(0.5)),
-        S.RoughConductorBxDF(jnp.float32(0.3), jnp.ones(4, jnp.float32) * 0.2, jnp.ones(4, jnp.float32) * 3),
-        S.RoughDielectricBxDF(jnp.float32(0.3), jnp.ones(4, jnp.float32) * 1.5),
-        S.DielectricBxDF(jnp.ones(4, jnp.float32) * 1.5),
+        sc.DiffuseBxDF(jnp.float32(0.5)),
+        sc.RoughConductorBxDF(
+            jnp.float32(0.3), jnp.ones(4, jnp.float32) * 0.2, jnp.ones(4, jnp.float32) * 3
+        ),
+        sc.RoughDielectricBxDF(jnp.float32(0.3), jnp.ones(4, jnp.float32) * 1.5),
+        sc.DielectricBxDF(jnp.ones(4, jnp.float32) * 1.5),
     ]:
         s = b.sample_f(wo, u[:, 0], u[:, 1:])
         assert s.f.dtype == jnp.float32 and s.wi.dtype == jnp.float32 and s.pdf.dtype == jnp.float32
