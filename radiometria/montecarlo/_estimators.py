@@ -85,7 +85,8 @@ def estimate_mean(values, *, axis: int = 0) -> Estimate:
     An `Estimate` (other axes are kept, e.g. colour channels).
 
     !!! note "Thesis"
-        Eq. 2.32, the Monte Carlo estimator; ch. 6.
+        Eq. 2.32, the Monte Carlo estimator; with uniform samples on a region A
+        (`Y_i = |A| f(X_i)`) it is Eq. 2.33; ch. 6.
 
     ??? cite "References"
         `Owen2013` §2.1; `Pharr2023` §2.1.3.
