@@ -2,7 +2,9 @@
 
 from jaxtyping import Array, ArrayLike, Bool, Float, Int, PRNGKeyArray
 
-FloatLike = Float[ArrayLike, "..."]  # an elementwise input; Python floats are accepted
+FloatLike = (
+    Float[ArrayLike, "..."] | int
+)  # an elementwise input; Python floats and ints are accepted
 XYZ = Float[Array, "*batch 3"]  # channels are on the LAST axis (colour's convention)
 RGB = Float[Array, "*batch 3"]
 Directions = Float[Array, "*batch 3"]

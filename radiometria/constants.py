@@ -24,38 +24,46 @@ FREQUENCY_K_CD = 540e12  # Hz, the frequency at which K_CD is defined (SI 2019)
 
 # --- Derived radiometric constants --------------------------------------------------------
 # Stefan-Boltzmann: sigma = 2 pi^5 k^4 / (15 h^3 c^2)  (thesis eq. 1.22)
-STEFAN_BOLTZMANN = 2.0 * math.pi**5 * BOLTZMANN**4 / (15.0 * PLANCK**3 * SPEED_OF_LIGHT**2)  # W m^-2 K^-4
+STEFAN_BOLTZMANN = (
+    2.0 * math.pi**5 * BOLTZMANN**4 / (15.0 * PLANCK**3 * SPEED_OF_LIGHT**2)
+)  # W m^-2 K^-4
 # First radiation constant for spectral radiance, c_1L = 2 h c^2 (thesis eq. 1.24)
 C1L = 2.0 * PLANCK * SPEED_OF_LIGHT**2  # W m^2 sr^-1
 # First radiation constant for spectral exitance, c_1 = 2 pi h c^2 = pi c_1L
 C1 = math.pi * C1L  # W m^2
 # Second radiation constant, c_2 = h c / k
 C2 = PLANCK * SPEED_OF_LIGHT / BOLTZMANN  # m K
-# Wien's displacement constant b = c_2 / x, where x solves x = 5 (1 - exp(-x)); x is the
-# closed form 5 + W_0(-5 e^-5) (Lambert W), evaluated here by Newton iteration to machine precision.
+# Wien's displacement laws. The peak of Planck's law per unit wavelength is at x = c_2/(lambda T)
+# solving x = 5 (1 - e^-x); per unit frequency at x = h nu/(k T) solving x = 3 (1 - e^-x). The
+# closed forms are n + W_0(-n e^-n) (Lambert W); `wien_root` evaluates them by Newton iteration.
 
 
-def _wien_x() -> float:
-    x = 5.0
+def wien_root(n: int) -> float:
+    """The positive root of x = n (1 - exp(-x)) for n = 3 (frequency) or 5 (wavelength)."""
+    x = float(n)
     for _ in range(50):
-        f = x - 5.0 * (1.0 - math.exp(-x))
-        x -= f / (1.0 - 5.0 * math.exp(-x))
+        x -= (x - n * (1.0 - math.exp(-x))) / (1.0 - n * math.exp(-x))
     return x
 
 
-WIEN_X = _wien_x()  # dimensionless root of x = 5 (1 - e^-x), about 4.965114231744276
-WIEN_DISPLACEMENT = C2 / WIEN_X  # m K, about 2.897771955e-3 (CODATA 2018: 2.897771955e-3, exact)
+WIEN_X = wien_root(5)  # dimensionless, about 4.965114231744276
+WIEN_DISPLACEMENT = C2 / WIEN_X  # m K, 2.897771955e-3 (CODATA 2018, exact)
+WIEN_FREQUENCY_X = wien_root(3)  # dimensionless, about 2.821439372122079
+WIEN_FREQUENCY_DISPLACEMENT = WIEN_FREQUENCY_X * BOLTZMANN / PLANCK  # Hz K^-1, 5.878925757e10
 
 # --- Photometric constants ------------------------------------------------------------------
-# Wavelength in standard air... the CIE uses the vacuum wavelength of 540 THz, 555.016 nm.
-WAVELENGTH_K_CD_NM = SPEED_OF_LIGHT / FREQUENCY_K_CD * 1e9  # nm, about 555.016 nm (in vacuum)
+# The wavelength of 540 THz radiation is 555.171 nm in vacuum and 555.016 nm in standard air;
+# the CIE tables of V(lambda) are given against wavelengths in standard air.
+WAVELENGTH_K_CD_NM = SPEED_OF_LIGHT / FREQUENCY_K_CD * 1e9  # nm, 555.171 nm (in vacuum)
+WAVELENGTH_K_CD_AIR_NM = 555.016  # nm, in standard air (CIE 015:2018)
 # Maximum photopic luminous efficacy K_m = K_cd / V(555.016 nm). CIE 015:2018 states
 # K_m = 683.002 lm W^-1 at 555 nm, because V(lambda) is tabulated with its peak 1 at 555 nm
 # and V(555.016 nm) = 0.999997 by interpolation; the thesis (section 2.1) quotes this value.
 K_M = 683.002  # lm W^-1, photopic, at 555 nm (CIE 015:2018, thesis section 2.1)
-# Maximum scotopic luminous efficacy K'_m = K_cd / V'(555.016 nm) = 1700.13 lm W^-1 at 507 nm
-# (CIE 015:2018).
-K_M_SCOTOPIC = 1700.13  # lm W^-1, scotopic, at 507 nm (CIE 015:2018)
+# Maximum scotopic luminous efficacy K'_m = K_cd / V'(555.016 nm) = 683 / 0.40175 = 1700.06
+# lm W^-1 at 507 nm (CIE 015:2018); V'(555.016 nm) by linear interpolation of the CIE 1951 table.
+# tests/test_constants.py re-derives both K_m and K'_m from the packaged tables.
+K_M_SCOTOPIC = 1700.06  # lm W^-1, scotopic, at 507 nm (CIE 015:2018)
 
 # --- Unit conversions: the only place where nm and m meet ------------------------------------
 NM_PER_M = 1e9  # nm m^-1

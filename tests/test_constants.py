@@ -43,9 +43,10 @@ def test_constants_wien_root():
     assert x == pytest.approx(5.0 * (1.0 - math.exp(-x)), rel=1e-15)
     assert x == pytest.approx(4.965114231744276, rel=1e-15)
     # The frequency form of Wien's law has the root of x = 3 (1 - e^-x).
-    from radiometria.radiometry._planck import _WIEN_FREQUENCY_DISPLACEMENT
-
-    assert _WIEN_FREQUENCY_DISPLACEMENT == pytest.approx(
+    assert c.WIEN_FREQUENCY_X == pytest.approx(
+        3.0 * (1.0 - math.exp(-c.WIEN_FREQUENCY_X)), rel=1e-15
+    )
+    assert c.WIEN_FREQUENCY_DISPLACEMENT == pytest.approx(
         _codata("Wien frequency displacement law constant"), rel=4e-16
     )
 

@@ -1,4 +1,4 @@
-"""Camera (thesis section 2.3): pinhole projection, reconstruction filters and film.
+r"""Camera (thesis section 2.3): pinhole projection, reconstruction filters and film.
 
 - `_pinhole`: coordinate spaces, `look_at`, the projection matrices of eq. 2.28-2.30,
   `PinholeCamera`, `generate_ray` and its inverse `project` (section 2.3.1);
@@ -7,6 +7,19 @@
 - `_film`: spectral samples to XYZ, per-pixel accumulation (eq. 2.35) and splatting (eq. 2.34),
   development to linear RGB;
 - `_io`: OpenEXR (RGB and spectral) and sRGB PNG files, written atomically.
+
+Conventions (Mitsuba 3's, which the reference scenes use):
+
+- camera space has $+z$ forward, $+y$ up and $+x$ towards the image's **left**; a camera's
+  `to_world` is `look_at(origin, target, up)` (the Cornell box: `diag(-1, 1, -1)` plus the
+  translation $(0, 0, 3.9)$, so the red wall $x = -1$ is on the image's left);
+- image space (NDC) is the view frustum mapped onto $[-1, 1]^3$ by thesis eq. 2.30;
+- raster coordinates are continuous pixels, $(0, 0)$ the top-left image corner, pixel
+  centres at half-integers: $x = W (1 - x_\mathrm{ndc})/2$, $y = H (1 - y_\mathrm{ndc})/2$;
+- filters are normalised to unit integral; `sample` returns offsets $\propto |f|$ and
+  weights $f/p$ (thesis eq. 2.35);
+- the film's XYZ are $\int L \bar{\mathbf{x}}\,\mathrm{d}\lambda / \int \bar{y}\,\mathrm{d}\lambda$
+  (Mitsuba's spectral film normalisation: a constant spectrum $L = 1$ gives $Y = 1$).
 """
 
 from ._film import (

@@ -27,6 +27,7 @@ import numpy as np
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
 from .._types import Array, ArrayLike, Float
+from ..colorimetry import get_cmfs, get_colourspace
 from ._filters import AbstractFilter
 
 DEFAULT_OBSERVER = "CIE 1931 2 Degree Standard Observer"
@@ -34,8 +35,6 @@ DEFAULT_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 def _cmf_table(cmfs, observer: str) -> tuple[np.ndarray, np.ndarray]:
     if cmfs is None:
-        from ..colorimetry import get_cmfs  # floor 3; imported late so `camera` imports alone
-
         cmfs = get_cmfs(observer)
     if isinstance(cmfs, tuple | list) and len(cmfs) == 2:
         wl, values = cmfs
@@ -63,7 +62,10 @@ class Film(eqx.Module):
 
     `Film(width, height)` starts an empty film; the `film_*` functions return updated copies.
     The CIE table (divided by $\int \bar{y}$) travels with the film, so adding samples needs no
-    other input.
+    other input. Normalisation (Mitsuba 3's spectral film): $\mathrm{XYZ} = \int L
+    \bar{\mathbf{x}}\,\mathrm{d}\lambda / \int \bar{y}\,\mathrm{d}\lambda$, so a constant spectral
+    radiance $L = 1$ gives $Y = 1$ (Mitsuba divides by its constant 106.7502; $\int\bar{y}$ of the
+    1 nm CIE 1931 table is 106.857, 0.1 % apart). $Y$ is not luminance in cd m^-2.
 
     **Arguments:**
 
@@ -378,8 +380,6 @@ def film_merge(a: Film, b: Film) -> Film:
 
 def _xyz_to_rgb_matrix(colourspace, dtype) -> Array:
     if isinstance(colourspace, str):
-        from ..colorimetry import get_colourspace  # floor 3; imported late
-
         colourspace = get_colourspace(colourspace)
     m = getattr(colourspace, "matrix_XYZ_to_RGB", colourspace)
     m = as_float_array(m, "colourspace")

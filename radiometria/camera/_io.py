@@ -13,7 +13,10 @@ import zlib
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
+import jax.numpy as jnp
 import numpy as np
+
+from ..colorimetry import srgb_eotf_inverse
 
 # Attributes every OpenEXR header has; user metadata may not use these names.
 _EXR_STANDARD = frozenset(
@@ -313,10 +316,8 @@ def _png_chunk(kind: bytes, data: bytes) -> bytes:
 
 
 def _srgb_encode(x: np.ndarray) -> np.ndarray:
-    """IEC 61966-2-1 sRGB encoding (the piecewise inverse EOTF) of linear values in [0, 1]."""
-    return np.where(
-        x <= 0.0031308, 12.92 * x, 1.055 * np.power(np.maximum(x, 0.0031308), 1 / 2.4) - 0.055
-    )
+    """IEC 61966-2-1 sRGB encoding of linear values in [0, 1] (`colorimetry.srgb_eotf_inverse`)."""
+    return np.asarray(srgb_eotf_inverse(jnp.asarray(x)), dtype=np.float64)
 
 
 def write_png(path, rgb_linear, exposure: float = 0.0) -> Path:

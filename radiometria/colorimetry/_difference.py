@@ -6,11 +6,18 @@ units]. Square roots are guarded so that identical colours (Delta E = 0) and neu
 (C* = 0) give finite gradients.
 """
 
+import math
+
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_broadcastable, check_last_axis
-from ._models import _hue_degrees, _safe_norm2
+from ._fastmath import atan2_degrees, sin_small
+from ._models import _safe_norm2
+
+_COS30, _SIN30 = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+_COS6, _SIN6 = math.cos(math.radians(6.0)), math.sin(math.radians(6.0))
+_COS63, _SIN63 = math.cos(math.radians(63.0)), math.sin(math.radians(63.0))
 
 
 def _pair(Lab_1, Lab_2):
@@ -95,34 +102,52 @@ def delta_E_CIE2000(
     a_p_2 = (1.0 + G) * a_2
     C_p_1 = _safe_norm2(a_p_1, b_1)
     C_p_2 = _safe_norm2(a_p_2, b_2)
-    h_p_1 = _hue_degrees(b_1, a_p_1)
-    h_p_2 = _hue_degrees(b_2, a_p_2)
+
+    # Hue angles as unit vectors e = (a', b) / C' (zero for a neutral colour, whose hue is 0 by
+    # convention). This is Sharma's algorithm without its angle arithmetic, so that only one
+    # arctan is evaluated (float64 sin/cos/atan2 are slow scalar calls on XLA:CPU):
+    #   Delta H' = 2 sqrt(C'1 C'2) sin(Delta h'/2) = sign(Delta h') sqrt(C'1 C'2) |e2 - e1|,
+    #   the mean hue h_bar' points along e1 + e2 (the bisector of the shorter arc).
+    n_1 = C_p_1 == 0
+    n_2 = C_p_2 == 0
+    e1x = jnp.where(n_1, 0.0, a_p_1 / jnp.where(n_1, 1.0, C_p_1))
+    e1y = jnp.where(n_1, 0.0, b_1 / jnp.where(n_1, 1.0, C_p_1))
+    e2x = jnp.where(n_2, 0.0, a_p_2 / jnp.where(n_2, 1.0, C_p_2))
+    e2y = jnp.where(n_2, 0.0, b_2 / jnp.where(n_2, 1.0, C_p_2))
+    cross = e1x * e2y - e1y * e2x  # sin(h'2 - h'1)
+    # Exactly opposite hues (|h'2 - h'1| = 180): Sharma takes Delta h' = h'2 - h'1, positive
+    # when h'1 < 180, i.e. when e1 lies in the upper half plane.
+    e1_upper = (e1y > 0) | ((e1y == 0) & (e1x > 0))
+    sign = jnp.where(cross > 0, 1.0, jnp.where(cross < 0, -1.0, jnp.where(e1_upper, 1.0, -1.0)))
+    d_H = sign * _safe_sqrt(C_p_1 * C_p_2) * _safe_norm2(e2x - e1x, e2y - e1y)
 
     d_L = L_2 - L_1
     d_C = C_p_2 - C_p_1
-    C_pp = C_p_1 * C_p_2
-    neutral = C_pp == 0
-    dh = h_p_2 - h_p_1
-    dh = jnp.where(dh > 180.0, dh - 360.0, jnp.where(dh < -180.0, dh + 360.0, dh))
-    dh = jnp.where(neutral, 0.0, dh)
-    d_H = 2.0 * _safe_sqrt(C_pp) * jnp.sin(jnp.radians(dh / 2.0))
-
     L_bar = 0.5 * (L_1 + L_2)
     C_bar_p = 0.5 * (C_p_1 + C_p_2)
-    h_sum = h_p_1 + h_p_2
-    far = jnp.abs(h_p_1 - h_p_2) > 180.0
-    h_bar = jnp.where(
-        far, jnp.where(h_sum < 360.0, (h_sum + 360.0) / 2.0, (h_sum - 360.0) / 2.0), h_sum / 2.0
-    )
-    h_bar = jnp.where(neutral, h_sum, h_bar)
 
+    # Mean hue direction (c, s) = (cos h_bar', sin h_bar').
+    mx, my = e1x + e2x, e1y + e2y
+    m = _safe_norm2(mx, my)
+    opposite = m == 0
+    # e1 + e2 = 0: both neutral (h_bar' = 0), or opposite hues (h_bar' = min(h'1, h'2) + 90).
+    lx = jnp.where(e1_upper, e1x, e2x)
+    ly = jnp.where(e1_upper, e1y, e2y)
+    both_neutral = n_1 & n_2
+    c = jnp.where(opposite, jnp.where(both_neutral, 1.0, -ly), mx / jnp.where(opposite, 1.0, m))
+    s = jnp.where(opposite, jnp.where(both_neutral, 0.0, lx), my / jnp.where(opposite, 1.0, m))
+    # cos(k h + phi) from (c, s) by the angle-addition formulas.
+    c2, s2 = c * c - s * s, 2.0 * c * s
+    c3, s3 = c * c2 - s * s2, s * c2 + c * s2
+    c4, s4 = c2 * c2 - s2 * s2, 2.0 * c2 * s2
     T = (
         1.0
-        - 0.17 * jnp.cos(jnp.radians(h_bar - 30.0))
-        + 0.24 * jnp.cos(jnp.radians(2.0 * h_bar))
-        + 0.32 * jnp.cos(jnp.radians(3.0 * h_bar + 6.0))
-        - 0.20 * jnp.cos(jnp.radians(4.0 * h_bar - 63.0))
+        - 0.17 * (c * _COS30 + s * _SIN30)  # cos(h - 30)
+        + 0.24 * c2  # cos(2h)
+        + 0.32 * (c3 * _COS6 - s3 * _SIN6)  # cos(3h + 6)
+        - 0.20 * (c4 * _COS63 + s4 * _SIN63)  # cos(4h - 63)
     )
+    h_bar = atan2_degrees(s, c)  # [0, 360)
     d_theta = 30.0 * jnp.exp(-(((h_bar - 275.0) / 25.0) ** 2))
     C_bar_p_7 = C_bar_p**7
     R_C = 2.0 * _safe_sqrt(C_bar_p_7 / (C_bar_p_7 + 25.0**7))
@@ -130,7 +155,7 @@ def delta_E_CIE2000(
     S_L = 1.0 + 0.015 * L_50 / jnp.sqrt(20.0 + L_50)
     S_C = 1.0 + 0.045 * C_bar_p
     S_H = 1.0 + 0.015 * C_bar_p * T
-    R_T = -jnp.sin(jnp.radians(2.0 * d_theta)) * R_C
+    R_T = -sin_small(jnp.radians(2.0 * d_theta)) * R_C  # 2 d_theta <= 60 degrees
 
     tL = d_L / (k_L * S_L)
     tC = d_C / S_C

@@ -6,6 +6,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from ._fastmath import cbrt_positive
 
 # CIE 1976 constants, exact rationals (CIE 015:2018 eq. 8.3-8.5): epsilon = (6/29)^3.
 _DELTA = 6.0 / 29.0
@@ -44,8 +45,10 @@ def _white(white_XYZ, dtype):
 
 def _f_lab(t: Array) -> Array:
     """CIE 1976 lightness function f(t), with the linear segment below (6/29)^3."""
+    # cbrt_positive: a vectorised cube root (jnp.cbrt is a slow scalar call on XLA:CPU).
     big = t > _EPSILON
-    return jnp.where(big, jnp.cbrt(jnp.where(big, t, 1.0)), t / (3.0 * _DELTA**2) + 4.0 / 29.0)
+    root = cbrt_positive(jnp.where(big, t, 1.0))
+    return jnp.where(big, root, t / (3.0 * _DELTA**2) + 4.0 / 29.0)
 
 
 def _f_lab_inverse(f: Array) -> Array:

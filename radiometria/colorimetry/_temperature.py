@@ -24,8 +24,8 @@ from jaxtyping import Array, ArrayLike, Float
 from .._checks import as_float_array, check_choice, check_last_axis, check_positive
 from ..constants import C2
 from ..radiometry import planck
-from ._daylight import daylight_locus_xy
 from ._data import CMFS_XYZ, DEFAULT_OBSERVER, resolve_observer
+from ._daylight import daylight_locus_xy
 from ._models import UCS_uv_to_xy, xy_to_UCS_uv
 
 # Ohno (2013) table range and spacing, as in colour-science 0.4.7 (`planckian_table`).
@@ -127,7 +127,10 @@ def _ohno_temperatures(start: float, end: float, spacing: float) -> np.ndarray:
     s = spacing
     while (t := t * s) < end:
         Ti.append(t)
-        D = min(max((t - CCT_MINIMAL_OHNO2013) / (CCT_MAXIMAL_OHNO2013 - CCT_MINIMAL_OHNO2013), 0.0), 1.0)
+        D = min(
+            max((t - CCT_MINIMAL_OHNO2013) / (CCT_MAXIMAL_OHNO2013 - CCT_MINIMAL_OHNO2013), 0.0),
+            1.0,
+        )
         s = spacing * (1.0 - D) + (1.0 + (spacing - 1.0) / 10.0) * D
     return np.asarray(Ti + [end - 1.0, end])
 

@@ -1,3 +1,252 @@
-"""Figures for `radiometria.montecarlo`."""
+"""Figures for `radiometria.montecarlo` (thesis ch. 5-7): point sets, convergence, variance."""
 
-from ._registry import figure, save  # noqa: F401
+import math
+
+import numpy as np
+
+from ._registry import figure, save
+
+
+@figure("fig_5_point_sets")
+def fig_5_point_sets(out_dir, *, smoke: bool = False):
+    """Two-dimensional point sets side by side (thesis ch. 5).
+
+    Independent uniform, jittered stratified, Latin hypercube, Halton (bases 2, 3), Sobol
+    (Joe-Kuo) and Owen-scrambled Sobol, 256 points each (64 in smoke mode), with the 16 x 16
+    grid that a (0, 8, 2)-net fills with exactly one point per elementary interval.
+    """
+    import jax
+    import matplotlib.pyplot as plt
+
+    from .. import montecarlo as mc
+
+    n = 64 if smoke else 256
+    side = int(round(math.sqrt(n)))
+    keys = jax.random.split(jax.random.key(0), 4)
+    sets = [
+        ("independent", mc.independent(n, 2, key=keys[0])),
+        (f"stratified {side}x{side}", mc.stratified((side, side), key=keys[1])),
+        ("Latin hypercube", mc.latin_hypercube(n, 2, key=keys[2])),
+        ("Halton (2, 3)", mc.halton(n, 2)),
+        ("Sobol (Joe-Kuo)", mc.sobol(n, 2)),
+        ("Sobol, Owen-scrambled", mc.sobol(n, 2, scramble="owen", key=keys[3])),
+    ]
+    fig, axes = plt.subplots(1, len(sets), figsize=(3.0 * len(sets), 3.3), layout="constrained")
+    for ax, (title, pts) in zip(axes, sets, strict=True):
+        pts = np.asarray(pts)
+        for t in np.linspace(0, 1, side + 1):
+            ax.axhline(t, color="0.88", lw=0.5, zorder=0)
+            ax.axvline(t, color="0.88", lw=0.5, zorder=0)
+        ax.scatter(pts[:, 0], pts[:, 1], s=6, color="tab:blue")
+        ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", title=title, xticks=[0, 1], yticks=[0, 1])
+    fig.suptitle(f"{n} points in $[0,1)^2$")
+    return save(fig, out_dir, "fig_5_point_sets")
+
+
+@figure("fig_6_convergence")
+def fig_6_convergence(out_dir, *, smoke: bool = False):
+    """RMSE against n for several integrands and samplers on log-log axes (thesis ch. 6).
+
+    Genz test integrands (smooth Gaussian and oscillatory, kinked continuous, discontinuous) in
+    2-4 dimensions; plain MC, Latin hypercube, Owen-scrambled Halton and Owen-scrambled Sobol,
+    each RMSE over independent replicates. The dotted guides have slopes -1/2 and -3/2.
+    """
+    import jax
+    import matplotlib.pyplot as plt
+
+    from .. import montecarlo as mc
+
+    ks = range(4, 9) if smoke else range(4, 15)
+    ns = [2**k for k in ks]
+    reps = 6 if smoke else 48
+    problems = [
+        ("Gaussian, d = 2", "gaussian", 2),
+        ("oscillatory, d = 4", "oscillatory", 4),
+        ("continuous (kinked), d = 3", "continuous", 3),
+        ("discontinuous, d = 2", "discontinuous", 2),
+    ]
+    methods = [("mc", "independent"), ("lhs", "Latin hypercube"), ("halton", "Halton (Owen)"),
+               ("sobol", "Sobol (Owen)")]  # fmt: skip
+    rng = np.random.default_rng(6)
+    fig, axes = plt.subplots(1, len(problems), figsize=(16.0, 4.0), layout="constrained")
+    key = jax.random.key(6)
+    for ax, (title, kind, d) in zip(axes, problems, strict=True):
+        f, exact = mc.genz(kind, rng.uniform(0.5, 1.5, d), rng.uniform(0.2, 0.8, d))
+        for method, label in methods:
+            key, sub = jax.random.split(key)
+            study = mc.convergence_study(f, exact, ns, method=method, dim=d, key=sub,
+                                         n_replicates=reps)  # fmt: skip
+            ax.loglog(ns, np.asarray(study.rmse), "o-", ms=3,
+                      label=f"{label} ({float(study.slope):.2f})")  # fmt: skip
+        ref = np.asarray(ns, dtype=float)
+        top = ax.get_ylim()[1] * 0.3
+        ax.loglog(ref, top * (ref / ref[0]) ** -0.5, "k:", lw=0.8)
+        ax.loglog(ref, top * (ref / ref[0]) ** -1.5, "k:", lw=0.8)
+        ax.set(title=title, xlabel="n", ylabel="RMSE")
+        ax.legend(fontsize=7, title="fitted slope", title_fontsize=7)
+    return save(fig, out_dir, "fig_6_convergence")
+
+
+# A Lambertian point at the origin (normal +z) lit by a rectangular area light of radiance 1
+# facing down at height H (thesis eq. 1.13: E = int L cos(theta) d omega).
+_RECT = ((-0.3, 0.7), (0.2, 0.9))
+_H = 1.0
+
+
+def _rect_vertices():
+    (x0, x1), (y0, y1) = _RECT
+    return np.array([[x0, y0, _H], [x1, y0, _H], [x1, y1, _H], [x0, y1, _H]])
+
+
+def rect_irradiance_exact() -> float:
+    """Lambert's closed form for a polygon of unit radiance: E = 1/2 sum_i theta_i (n . u_i)."""
+    v = _rect_vertices()
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    total = 0.0
+    for i in range(4):
+        a, b = v[i], v[(i + 1) % 4]
+        c = np.cross(a, b)
+        total += math.acos(np.clip(a @ b, -1, 1)) * c[2] / np.linalg.norm(c)
+    return abs(0.5 * total)
+
+
+def _rect_triangles():
+    import jax.numpy as jnp
+
+    v = jnp.asarray(_rect_vertices())
+    return [(v[0], v[1], v[2]), (v[0], v[2], v[3])]
+
+
+def _rect_solid_angle() -> float:
+    from .. import montecarlo as mc
+
+    return float(sum(mc.spherical_triangle_area(*t) for t in _rect_triangles()))
+
+
+def _rect_terms(method: str, n: int, key):
+    """Per-sample terms of the irradiance estimators (mean = E), shape (n,)."""
+    import jax
+    import jax.numpy as jnp
+
+    from .. import montecarlo as mc
+
+    (x0, x1), (y0, y1) = _RECT
+    area = (x1 - x0) * (y1 - y0)
+
+    def hits(w):
+        t = _H / jnp.maximum(w[:, 2], 1e-12)
+        px, py = t * w[:, 0], t * w[:, 1]
+        inside = (w[:, 2] > 0) & (px >= x0) & (px <= x1) & (py >= y0) & (py <= y1)
+        return inside, t
+
+    def light_pdf_sa(w):  # area sampling density converted to solid angle: d^2 / (A cos_l)
+        inside, t = hits(w)
+        return jnp.where(inside, t**2 / (area * jnp.maximum(w[:, 2], 1e-12)), 0.0)
+
+    def sample_light(u):
+        p = jnp.stack(
+            [x0 + u[:, 0] * (x1 - x0), y0 + u[:, 1] * (y1 - y0), jnp.full(u.shape[0], _H)], -1
+        )
+        return p / jnp.linalg.norm(p, axis=1, keepdims=True)
+
+    def cos_pdf(w):
+        return mc.cosine_hemisphere_pdf(w[:, 2])
+
+    def f(w):  # L cos(theta) with L = 1 on the light
+        return jnp.where(hits(w)[0], w[:, 2], 0.0)
+
+    k1, k2 = jax.random.split(key)
+    u = jax.random.uniform(k1, (n, 2))
+    if method == "uniform hemisphere":
+        w = mc.sample_uniform_hemisphere(u)
+        return f(w) * 2 * math.pi
+    if method == "cosine hemisphere":
+        w = mc.sample_cosine_hemisphere(u)
+        return f(w) / cos_pdf(w)
+    if method == "light area":
+        w = sample_light(u)
+        return f(w) / light_pdf_sa(w)
+    if method == "spherical triangles":
+        tris = _rect_triangles()
+        omegas = jnp.stack([mc.spherical_triangle_area(*t) for t in tris])
+        idx, _, u0 = mc.sample_discrete(u[:, 0], omegas)
+        uu = jnp.stack([u0, u[:, 1]], -1)
+        w = jnp.where((idx == 0)[:, None], mc.sample_spherical_triangle(uu, *tris[0]),
+                      mc.sample_spherical_triangle(uu, *tris[1]))  # fmt: skip
+        return w[:, 2] * jnp.sum(omegas)
+    if method.startswith("MIS"):
+        beta = 2.0 if "power" in method else 1.0
+        wl = sample_light(u)
+        wc = mc.sample_cosine_hemisphere(jax.random.uniform(k2, (n, 2)))
+        pl = jnp.stack([light_pdf_sa(wl), cos_pdf(wl)], -1)
+        pc = jnp.stack([light_pdf_sa(wc), cos_pdf(wc)], -1)
+        tl = mc.mis_weights(pl, beta=beta)[:, 0] * f(wl) / pl[:, 0]
+        okc = pc[:, 1] > 0
+        tc = jnp.where(
+            okc, mc.mis_weights(pc, beta=beta)[:, 1] * f(wc) / jnp.where(okc, pc[:, 1], 1.0), 0.0
+        )
+        return tl + tc  # one sample of each strategy per term
+    if method == "light area + control variate":
+        # Control G = A cos_l / d^2 on the same light samples; E[G] = solid angle of the light.
+        w = sample_light(u)
+        y = f(w) / light_pdf_sa(w)
+        g = 1.0 / light_pdf_sa(w)
+        est = mc.control_variate(y, g, _rect_solid_angle())
+        beta = (jnp.mean(y) - est.mean) / (jnp.mean(g) - _rect_solid_angle())
+        return y - beta * (g - _rect_solid_angle())  # terms whose mean is the CV estimate
+    raise ValueError(method)
+
+
+RECT_METHODS = [
+    "uniform hemisphere",
+    "cosine hemisphere",
+    "light area",
+    "spherical triangles",
+    "MIS balance (light + cosine)",
+    "MIS power (light + cosine)",
+    "light area + control variate",
+]
+
+
+@figure("fig_7_variance_reduction")
+def fig_7_variance_reduction(out_dir, *, smoke: bool = False):
+    """Variance of irradiance estimators for a rectangular area light (thesis eq. 1.13, ch. 7).
+
+    A Lambertian point under a unit-radiance rectangle; the exact irradiance is Lambert's
+    polygon formula. Left: RMSE against the number of samples for uniform and cosine hemisphere
+    sampling, light-area sampling, uniform spherical-triangle (solid angle) sampling, MIS of
+    light and cosine sampling (balance and power heuristics; each term uses one sample of
+    each) and area sampling with a control variate (the light's solid angle). Right: the
+    variance per sample.
+    """
+    import jax
+    import matplotlib.pyplot as plt
+
+    exact = rect_irradiance_exact()
+    ns = [4, 16, 64, 256] if smoke else [4, 16, 64, 256, 1024, 4096]
+    reps = 32 if smoke else 256
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12.0, 4.2), layout="constrained")
+    key = jax.random.key(7)
+    per_sample_var = []
+    for method in RECT_METHODS:
+        rmse = []
+        for m in ns:
+            key, sub = jax.random.split(key)
+            ests = jax.vmap(lambda k, m=m, method=method: _rect_terms(method, m, k).mean())(
+                jax.random.split(sub, reps)
+            )
+            rmse.append(float(np.sqrt(np.mean((np.asarray(ests) - exact) ** 2))))
+        key, sub = jax.random.split(key)
+        terms = _rect_terms(method, 20_000 if smoke else 200_000, sub)
+        per_sample_var.append(float(np.var(np.asarray(terms))))
+        ax0.loglog(ns, rmse, "o-", ms=3, label=method)
+    ax0.set(xlabel="samples n", ylabel="RMSE of the irradiance",
+            title=f"rectangular light, exact E = {exact:.5f} (eq. 1.13)")  # fmt: skip
+    ax0.legend(fontsize=7)
+    y = np.arange(len(RECT_METHODS))
+    ax1.barh(y, per_sample_var, color="tab:blue")
+    ax1.set_yticks(y, RECT_METHODS, fontsize=8)
+    ax1.set_xscale("log")
+    ax1.invert_yaxis()
+    ax1.set(xlabel="variance per sample", title="variance of one term")
+    return save(fig, out_dir, "fig_7_variance_reduction")

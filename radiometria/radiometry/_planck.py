@@ -49,18 +49,7 @@ _H_OVER_K = _c.PLANCK / _c.BOLTZMANN  # K s (K Hz^-1)
 _X_SWITCH = 20.0
 
 
-def _wien_root(n: int) -> float:
-    """Positive root of x = n (1 - exp(-x)), by Newton's method (to machine precision)."""
-    x = float(n)
-    for _ in range(50):
-        x -= (x - n * (1.0 - math.exp(-x))) / (1.0 - n * math.exp(-x))
-    return x
-
-
-# Wien's displacement law per frequency: the peak of L_nu sits at h nu / (k T) = x_3, the root of
-# x = 3 (1 - e^-x), about 2.821439372122079 (CODATA: b' = x_3 k / h = 5.878925757e10 Hz K^-1).
-_WIEN_FREQUENCY_X = _wien_root(3)
-_WIEN_FREQUENCY_DISPLACEMENT = _WIEN_FREQUENCY_X * _c.BOLTZMANN / _c.PLANCK  # Hz K^-1
+_WIEN_FREQUENCY_DISPLACEMENT = _c.WIEN_FREQUENCY_DISPLACEMENT  # Hz K^-1
 _WIEN_DISPLACEMENT_NM = _c.WIEN_DISPLACEMENT * _c.NM_PER_M  # nm K, about 2.8978e6
 
 

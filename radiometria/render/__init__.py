@@ -1,5 +1,35 @@
 """Light transport (thesis ch. 8-9): meshes, BVH, scenes, integrators and the render driver."""
 
+# --- geometry (helper G) ---
+from ._bvh import BVH as BVH, build_bvh as build_bvh
+from ._intersect import (
+    Hit as Hit,
+    intersect_any as intersect_any,
+    intersect_brute_force_any as intersect_brute_force_any,
+    intersect_brute_force_closest as intersect_brute_force_closest,
+    intersect_closest as intersect_closest,
+)
+from ._loaders import load_mesh as load_mesh, load_mitsuba_xml as load_mitsuba_xml
+from ._mesh import (
+    TriangleMesh as TriangleMesh,
+    icosphere as icosphere,
+    sample_triangle_point as sample_triangle_point,
+    triangle_areas as triangle_areas,
+    triangle_normals as triangle_normals,
+)
+from ._scene import (
+    AreaEmitter as AreaEmitter,
+    CameraDescription as CameraDescription,
+    FilmDescription as FilmDescription,
+    Material as Material,
+    SceneDescription as SceneDescription,
+    SceneError as SceneError,
+    load_scene as load_scene,
+    look_at as look_at,
+)
+
+# isort: split
+
 # --- integrators (helper P) ---
 from ._driver import render as render
 from ._integrators import (

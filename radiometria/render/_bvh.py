@@ -219,9 +219,13 @@ def build_bvh(
     if v_in.ndim != 2 or v_in.shape[1] != 3:
         raise ValueError(f"`vertices` must have shape (v, 3), got {v_in.shape}.")
     if f_in.ndim != 2 or f_in.shape[1] != 3 or f_in.dtype.kind not in "iu":
-        raise ValueError(f"`faces` must be integers of shape (f, 3), got {f_in.dtype} {f_in.shape}.")
+        raise ValueError(
+            f"`faces` must be integers of shape (f, 3), got {f_in.dtype} {f_in.shape}."
+        )
     if not (isinstance(max_leaf_size, int) and 1 <= max_leaf_size <= _MAX_LEAF):
-        raise ValueError(f"`max_leaf_size` must be an int in [1, {_MAX_LEAF}], got {max_leaf_size!r}.")
+        raise ValueError(
+            f"`max_leaf_size` must be an int in [1, {_MAX_LEAF}], got {max_leaf_size!r}."
+        )
     if not (isinstance(n_bins, int) and n_bins >= 2):
         raise ValueError(f"`n_bins` must be an int >= 2, got {n_bins!r}.")
     n_tri = len(f_in)

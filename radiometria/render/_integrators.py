@@ -17,11 +17,13 @@ for a batch of rays at once, at the four hero wavelengths of each path.
 - `direct_radiance`: direct illumination (emission, one light sample and one BSDF sample,
   combined with MIS); the same estimator as `path_radiance` with `max_depth=2`.
 
-Everything is structure-of-arrays over the ray batch, the bounce loop is a `lax.scan` of static
-length `max_depth - 1`, and a terminated path keeps running with zero throughput, so one
-compiled program serves every batch. Random numbers come in as one array `u` of shape
-`(rays, sample_dimensions(max_depth))`, so independent and quasi-random samplers feed the same
-code.
+Everything is structure-of-arrays over the ray batch, and the bounce loop is one `lax.scan` of
+static length `max_depth - 1` (one compiled copy of the bounce). Within a bounce, the live
+paths are compacted (`jnp.nonzero` with a static size) and traced in chunks of static size by a
+`lax.fori_loop` whose trip count is the number of live chunks: terminated paths (escaped,
+absorbed, killed by roulette) cost nothing, and every shape stays static. Random numbers come
+in as one array `u` of shape `(rays, sample_dimensions(max_depth))`, so independent and
+quasi-random samplers feed the same code.
 
 Per bounce the eight variates are used as `[light point u0, u1 | BSDF u0, u1 | light choice,
 BSDF lobe | roulette, unused]`, so each 2D sample is one aligned pair of dimensions (what a
@@ -113,6 +115,7 @@ def path_radiance(
     *,
     max_depth: int,
     rr_depth: int = 5,
+    chunk: int | None = None,
 ) -> Float[Array, "n k"]:
     r"""Spectral radiance arriving along each ray, by path tracing with NEE, MIS and roulette.
 
@@ -125,6 +128,9 @@ def path_radiance(
     - `max_depth`: largest number of path segments (Mitsuba's meaning), a static int >= 1.
     - `rr_depth`: number of segments after which Russian roulette starts (static int >= 1);
         a value >= `max_depth` turns roulette off.
+    - `chunk`: paths traced together within a bounce (static; default an eighth of the batch,
+        at least 4096). Each bounce traces only the live paths, gathered into chunks of this
+        size, so the cost follows the live paths; the result does not depend on it.
 
     **Returns:**
 
@@ -150,87 +156,120 @@ def path_radiance(
             f"`u` must have shape (rays, {dims}) = {(n_rays, dims)} for max_depth={max_depth}, "
             f"got {u.shape}."
         )
-    dtype = origins.dtype
-    eps = scene.ray_epsilon
-
     v = _vertex(scene, origins, directions)
     radiance = _emitted(scene, v, wavelength_nm)
-    beta = jnp.ones_like(radiance)
     if max_depth == 1:
         return radiance
-
-    def bounce(carry, u_b, *, roulette: bool):
-        v, d, beta, radiance, alive = carry
-        wo = -d
-        material = scene.face_material[v.face]
-        two_sided = scene.two_sided[material]
-        # Shading frame: the face normal, flipped towards wo for two-sided materials. A ray
-        # arriving at the back of a one-sided surface ends there (Mitsuba's one-sided BSDFs).
-        front = v.cos_o > 0
-        n = jnp.where((two_sided & ~front)[:, None], -v.n, v.n)
-        alive = alive & v.valid & (front | two_sided)
-        s, t = coordinate_system(n)
-
-        def to_local(w):
-            return jnp.stack([_dot(w, s), _dot(w, t), _dot(w, n)], axis=-1)
-
-        def to_world(w):
-            return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
-
-        wo_l = to_local(wo)
-        bsdf = scene.bsdf(material, wavelength_nm)
-        offset = eps * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
-
-        # Next-event estimation: a point on an emissive triangle, chosen by power x area.
-        j = jnp.searchsorted(scene.light_cdf, u_b[:, 4], side="right")
-        lf = scene.light_face[jnp.clip(j, 0, scene.light_face.shape[0] - 1)]
-        bary = sample_uniform_triangle(u_b[:, 0:2]).astype(dtype)
-        y = scene.p0[lf] + bary[:, 1:2] * scene.e1[lf] + bary[:, 2:3] * scene.e2[lf]
-        to_light = y - v.p
-        dist = jnp.sqrt(_dot(to_light, to_light))
-        wi = to_light / jnp.where(dist > 0, dist, 1.0)[:, None]
-        pdf_light = _light_pdf_solid_angle(scene, lf, dist, -_dot(scene.normal[lf], wi))
-        wi_l = to_local(wi)
-        f_light = bsdf.f(wo_l, wi_l) * jnp.abs(wi_l[:, 2:3])
-        w_light = power_heuristic(1, pdf_light, 1, bsdf.pdf(wo_l, wi_l))
-        use = alive & (pdf_light > 0)
-        shadow_tmax = jnp.where(use, dist * (1.0 - 1e-4) - offset, 0.0)
-        use = use & ~scene.intersect_any(_offset(v.p, v.n, wi, offset), wi, shadow_tmax)
-        le = scene.radiance(jnp.maximum(scene.face_emitter[lf], 0), wavelength_nm)
-        nee = beta * f_light * le * (w_light / jnp.where(use, pdf_light, 1.0))[:, None]
-        radiance = radiance + jnp.where(use[:, None], nee, 0.0)
-
-        # BSDF sampling: the next path segment.
-        bs = bsdf.sample_f(wo_l, u_b[:, 5], u_b[:, 2:4])
-        alive = alive & (bs.pdf > 0)
-        weight = bs.f * (jnp.abs(bs.wi[:, 2]) / jnp.where(alive, bs.pdf, 1.0))[:, None]
-        beta = jnp.where(alive[:, None], beta * weight, 0.0)
-        wi = to_world(bs.wi)
-        wi = wi / jnp.sqrt(_dot(wi, wi))[:, None]
-        v_next = _vertex(scene, _offset(v.p, v.n, wi, offset), wi)
-
-        # Emission found by the BSDF sample, weighted against next-event estimation.
-        le = _emitted(scene, v_next, wavelength_nm)
-        pdf_l = _light_pdf_solid_angle(scene, v_next.face, v_next.t, v_next.cos_o)
-        w_bsdf = jnp.where(bs.is_delta, 1.0, power_heuristic(1, bs.pdf, 1, pdf_l))
-        radiance = radiance + jnp.where(alive[:, None], beta * le * w_bsdf[:, None], 0.0)
-
-        if roulette:
-            # Survive with probability q = min(max_lambda beta, 0.95); survivors gain 1/q.
-            q = jnp.minimum(jnp.max(beta, axis=-1), 0.95)
-            alive = alive & (u_b[:, 6] < q)
-            beta = jnp.where(alive[:, None], beta / jnp.where(alive, q, 1.0)[:, None], 0.0)
-        return (v_next, wi, beta, radiance, alive), None
-
-    # Roulette acts once `rr_depth` segments exist, i.e. from bounce index rr_depth - 1 on.
+    state = _PathState(v, directions, jnp.ones_like(radiance), radiance, v.valid)
     n_bounces = max_depth - 1
     u_b = jnp.moveaxis(u.reshape(n_rays, n_bounces, DIMENSIONS_PER_BOUNCE), 1, 0)
-    n_plain = min(rr_depth - 1, n_bounces)
-    carry = (v, directions, beta, radiance, v.valid)
-    carry, _ = jax.lax.scan(functools.partial(bounce, roulette=False), carry, u_b[:n_plain])
-    if n_plain < n_bounces:
-        carry, _ = jax.lax.scan(functools.partial(bounce, roulette=True), carry, u_b[n_plain:])
-    return carry[3]
+    chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)
+    n_pad = -(-n_rays // chunk) * chunk
+
+    def one_bounce(state: _PathState, xs):
+        b, u_bounce = xs
+        # Roulette acts once `rr_depth` segments exist, i.e. from bounce index rr_depth - 1 on.
+        roulette = b >= rr_depth - 1
+        # Stream compaction: only live paths are traced, in chunks of static size, so the
+        # work per bounce follows the number of live paths, not the batch.
+        (live,) = jnp.nonzero(state.alive, size=n_pad, fill_value=n_rays)
+        n_chunks = (jnp.sum(state.alive, dtype=jnp.int32) + chunk - 1) // chunk
+
+        def one_chunk(i, state):
+            sel = jax.lax.dynamic_slice_in_dim(live, i * chunk, chunk)
+            take = functools.partial(jnp.take, indices=sel, axis=0, mode="clip")
+            new = _bounce(
+                scene, jax.tree.map(take, state), take(wavelength_nm), take(u_bounce), roulette
+            )
+            return jax.tree.map(lambda a, x: a.at[sel].set(x, mode="drop"), state, new)
+
+        return jax.lax.fori_loop(0, n_chunks, one_chunk, state), None
+
+    bounces = jnp.arange(n_bounces, dtype=jnp.int32)
+    state, _ = jax.lax.scan(one_bounce, state, (bounces, u_b))
+    return state.radiance
+
+
+def _default_chunk(n_rays: int) -> int:
+    """Paths per compacted chunk: an eighth of the batch, at least 4096 (all when fewer)."""
+    return min(n_rays, max(4096, -(-n_rays // 8)))
+
+
+class _PathState(eqx.Module):
+    """The state of a batch of paths between bounces (arrays with a leading path axis)."""
+
+    v: _Vertex  # the current surface hit
+    d: Array  # direction of the segment that reached it
+    beta: Array  # path throughput (n, k)
+    radiance: Array  # radiance gathered so far (n, k)
+    alive: Array  # bool (n,)
+
+
+def _bounce(scene: RenderScene, state: _PathState, wavelength_nm, u_b, roulette) -> _PathState:
+    """One vertex of every path: NEE, BSDF sampling, the next hit and its emission, roulette."""
+    v, beta, radiance = state.v, state.beta, state.radiance
+    dtype = v.p.dtype
+    wo = -state.d
+    material = scene.face_material[v.face]
+    two_sided = scene.two_sided[material]
+    # Shading frame: the face normal, flipped towards wo for two-sided materials. A ray
+    # arriving at the back of a one-sided surface ends there (Mitsuba's one-sided BSDFs).
+    front = v.cos_o > 0
+    n = jnp.where((two_sided & ~front)[:, None], -v.n, v.n)
+    alive = state.alive & v.valid & (front | two_sided)
+    s, t = coordinate_system(n)
+
+    def to_local(w):
+        return jnp.stack([_dot(w, s), _dot(w, t), _dot(w, n)], axis=-1)
+
+    def to_world(w):
+        return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
+
+    wo_l = to_local(wo)
+    bsdf = scene.bsdf(material, wavelength_nm)
+    offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
+
+    # Next-event estimation: a point on an emissive triangle, chosen by power x area.
+    j = jnp.searchsorted(scene.light_cdf, u_b[:, 4], side="right")
+    lf = scene.light_face[jnp.clip(j, 0, scene.light_face.shape[0] - 1)]
+    bary = sample_uniform_triangle(u_b[:, 0:2]).astype(dtype)
+    y = scene.p0[lf] + bary[:, 1:2] * scene.e1[lf] + bary[:, 2:3] * scene.e2[lf]
+    to_light = y - v.p
+    dist = jnp.sqrt(_dot(to_light, to_light))
+    wi = to_light / jnp.where(dist > 0, dist, 1.0)[:, None]
+    pdf_light = _light_pdf_solid_angle(scene, lf, dist, -_dot(scene.normal[lf], wi))
+    wi_l = to_local(wi)
+    f_light = bsdf.f(wo_l, wi_l) * jnp.abs(wi_l[:, 2:3])
+    w_light = power_heuristic(1, pdf_light, 1, bsdf.pdf(wo_l, wi_l))
+    use = alive & (pdf_light > 0)
+    shadow_tmax = jnp.where(use, dist * (1.0 - 1e-4) - offset, 0.0)
+    use = use & ~scene.intersect_any(_offset(v.p, v.n, wi, offset), wi, shadow_tmax)
+    le = scene.radiance(jnp.maximum(scene.face_emitter[lf], 0), wavelength_nm)
+    nee = beta * f_light * le * (w_light / jnp.where(use, pdf_light, 1.0))[:, None]
+    radiance = radiance + jnp.where(use[:, None], nee, 0.0)
+
+    # BSDF sampling: the next path segment.
+    bs = bsdf.sample_f(wo_l, u_b[:, 5], u_b[:, 2:4])
+    alive = alive & (bs.pdf > 0)
+    weight = bs.f * (jnp.abs(bs.wi[:, 2]) / jnp.where(alive, bs.pdf, 1.0))[:, None]
+    beta = jnp.where(alive[:, None], beta * weight, 0.0)
+    wi = to_world(bs.wi)
+    wi = wi / jnp.sqrt(_dot(wi, wi))[:, None]
+    v_next = _vertex(scene, _offset(v.p, v.n, wi, offset), wi)
+
+    # Emission found by the BSDF sample, weighted against next-event estimation.
+    le = _emitted(scene, v_next, wavelength_nm)
+    pdf_l = _light_pdf_solid_angle(scene, v_next.face, v_next.t, v_next.cos_o)
+    w_bsdf = jnp.where(bs.is_delta, 1.0, power_heuristic(1, bs.pdf, 1, pdf_l))
+    radiance = radiance + jnp.where(alive[:, None], beta * le * w_bsdf[:, None], 0.0)
+
+    # Russian roulette: survive with probability q = min(max_lambda beta, 0.95); survivors
+    # are reweighted by 1/q.
+    q = jnp.minimum(jnp.max(beta, axis=-1), 0.95)
+    survive = ~roulette | (u_b[:, 6] < q)
+    alive = alive & survive & v_next.valid
+    beta = jnp.where(alive[:, None], beta / jnp.where(alive & roulette, q, 1.0)[:, None], 0.0)
+    return _PathState(v_next, wi, beta, radiance, alive)
 
 
 def direct_radiance(

@@ -198,8 +198,10 @@ def _triangles_of(geometry) -> tuple[Array, Array | None]:
     """`(f, 9)` corners in original face order, and the dtype source."""
     if isinstance(geometry, BVH):
         # back to the original face order, so ties resolve as for the mesh
-        inv = jnp.zeros_like(geometry.prim_ids).at[geometry.prim_ids].set(
-            jnp.arange(geometry.prim_ids.shape[0], dtype=jnp.int32)
+        inv = (
+            jnp.zeros_like(geometry.prim_ids)
+            .at[geometry.prim_ids]
+            .set(jnp.arange(geometry.prim_ids.shape[0], dtype=jnp.int32))
         )
         return geometry.triangles[inv]
     if isinstance(geometry, TriangleMesh):
@@ -530,9 +532,7 @@ _REFILL_EVERY = 4
 
 @eqx.filter_jit
 def _closest(bvh, o, d, tmin, tmax, lanes=_LANES, refill_every=_REFILL_EVERY):
-    return _traverse(
-        bvh, o, d, tmin, tmax, any_hit=False, lanes=lanes, refill_every=refill_every
-    )
+    return _traverse(bvh, o, d, tmin, tmax, any_hit=False, lanes=lanes, refill_every=refill_every)
 
 
 @eqx.filter_jit

@@ -221,7 +221,8 @@ def validate_triangles(
     if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
         bad = int(np.argwhere((faces < 0) | (faces >= len(vertices)))[0, 0])
         raise ValueError(
-            f"{where}: face {bad} {faces[bad].tolist()} indexes a vertex outside [0, {len(vertices)})."
+            f"{where}: face {bad} {faces[bad].tolist()} indexes a vertex outside "
+            f"[0, {len(vertices)})."
         )
     areas = _areas(np, vertices, faces) if faces.size else np.zeros(0)
     keep = areas > 0

@@ -4,7 +4,10 @@ Both samplers are counter-based: the variates of one (pass, pixel) pair depend o
 key, the pass index `s` and the pixel index `p`, never on how the driver batches the work or
 how many devices it uses, so every batching and sharding gives the same image.
 
-- `"independent"`: `jax.random.uniform(fold_in(fold_in(key, s), p), (d,))`.
+- `"independent"`: a counter-based generator: the 32-bit words of `(p, s, block, seed)` are
+  hashed with `pcg4d` (Jarzynski & Olano 2020), four variates per call, seeded from the
+  `jax.random` key. It costs about eight integer operations per variate, a seventh of
+  threefry's, and passes the statistical tests of that paper for structured inputs.
 - `"sobol"`: pbrt-v4's `PaddedSobolSampler`: dimensions are taken in pairs; pair `m` of pass
   `s` is point `pi(s)` of the first two Sobol dimensions (a (0, 2)-sequence), where `pi` is a
   random permutation of the pixel's `spp` sample indices (Kensler 2013), Owen-scrambled
@@ -25,6 +28,22 @@ __all__ = ["SAMPLERS", "pixel_samples"]
 SAMPLERS = ("independent", "sobol")
 
 _U32 = jnp.uint32
+
+
+def _pcg4d(x, y, z, w):
+    """The `pcg4d` hash of Jarzynski & Olano (2020): four uint32 words in, four out, (..., 4)."""
+    x = x * np.uint32(1664525) + np.uint32(1013904223)
+    y = y * np.uint32(1664525) + np.uint32(1013904223)
+    z = z * np.uint32(1664525) + np.uint32(1013904223)
+    w = w * np.uint32(1664525) + np.uint32(1013904223)
+    for i in range(2):
+        x = x + y * w
+        y = y + z * x
+        z = z + x * y
+        w = w + y * z
+        if i == 0:
+            x, y, z, w = (c ^ (c >> np.uint32(16)) for c in (x, y, z, w))
+    return jnp.stack([x, y, z, w], axis=-1)
 
 
 def _sobol_2d(index):
@@ -55,18 +74,19 @@ def pixel_samples(
 
     `u` in [0, 1), `(t, k, n_dims)`, of `dtype`.
     """
+    salt = jax.random.key_data(jax.random.fold_in(key, 0x50B01)).reshape(-1)[:2]
+    salt = salt.astype(_U32)
     if sampler == "independent":
-
-        def one(p, s):
-            k = jax.random.fold_in(jax.random.fold_in(key, s), p)
-            return jax.random.uniform(k, (n_dims,), dtype=jnp.float32)
-
-        u = jax.vmap(lambda p: jax.vmap(lambda s: one(p, s))(pass_index))(pixel_index)
-        return u.astype(dtype)
+        n_blocks = -(-n_dims // 4)
+        shape = (pixel_index.shape[0], pass_index.shape[0], n_blocks)
+        p = jnp.broadcast_to(pixel_index.astype(_U32)[:, None, None], shape)
+        s = jnp.broadcast_to(pass_index.astype(_U32)[None, :, None], shape)
+        b = jnp.broadcast_to(jnp.arange(n_blocks, dtype=_U32)[None, None, :], shape)
+        words = _pcg4d(p, s, b ^ salt[0], _mix32(b + salt[1]))  # (t, k, blocks, 4)
+        u = words.reshape(shape[0], shape[1], 4 * n_blocks)[..., :n_dims]
+        return uint32_to_unit_float(u, dtype)
     if sampler == "sobol":
         n_pairs = (n_dims + 1) // 2
-        salt = jax.random.key_data(jax.random.fold_in(key, 0x50B01)).reshape(-1)[:2]
-        salt = salt.astype(_U32)
         # One hash per (pixel, pair of dimensions): it permutes the sample index within the
         # pixel's spp samples and seeds the two Owen scrambles.
         p = pixel_index.astype(_U32)[:, None, None]

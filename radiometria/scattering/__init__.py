@@ -5,7 +5,8 @@
 - `_ior`: spectral indices of refraction (Sellmeier glasses and water, tabulated Au/Ag/Cu/Al);
 - `_microfacet`: the Trowbridge-Reitz (GGX) distribution with visible-normal sampling;
 - `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, smooth and
-  rough conductor and dielectric, two-sided wrapper.
+  rough conductor and dielectric, two-sided wrapper;
+- `_reflectance`: the reflectance quantities of table 3.2 by Monte Carlo.
 
 Conventions: the normal points out of the surface; in the local shading frame it is +z; all
 directions point away from the surface and are unit vectors (assumed, not checked).
@@ -68,4 +69,14 @@ from ._ior import (
 from ._microfacet import (
     TrowbridgeReitzDistribution as TrowbridgeReitzDistribution,
     roughness_to_alpha as roughness_to_alpha,
+)
+from ._reflectance import (
+    Cone as Cone,
+    biconical_reflectance as biconical_reflectance,
+    bihemispherical_reflectance as bihemispherical_reflectance,
+    conical_hemispherical_reflectance as conical_hemispherical_reflectance,
+    directional_conical_reflectance as directional_conical_reflectance,
+    directional_hemispherical_reflectance as directional_hemispherical_reflectance,
+    hemispherical_conical_reflectance as hemispherical_conical_reflectance,
+    hemispherical_directional_reflectance as hemispherical_directional_reflectance,
 )

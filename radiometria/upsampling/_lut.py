@@ -253,16 +253,22 @@ def _column_directions(resolution: int, dtype) -> np.ndarray:
     return e.reshape(-1, 3).astype(dtype)
 
 
-@dataclasses.dataclass(frozen=True)
-class _Schedule:
-    n_first: int  # LM steps (at most) for the cold start at k0
-    n_steps: int  # LM steps (at most) per brightness step
-    min_steps: int  # LM steps (at least) per brightness step
-    tolerance: float  # Delta E*ab
-    allowed_fraction: float  # rows that may miss the tolerance before a step ends
-    chunk: int
-    repair_capacity: int = 0  # entries refitted inside the compiled function
-    repair_steps: int = 20
+class _Schedule(eqx.Module):
+    """Iteration limits of the sweep, traced (changing them does not recompile)."""
+
+    n_first: Array  # LM steps (at most) for the cold start at k0
+    n_steps: Array  # LM steps (at most) per brightness step
+    min_steps: Array  # LM steps (at least) per brightness step
+    tolerance: Array  # Delta E*ab at which a step may end
+    allowed_fraction: Array  # fraction of a block's columns that may miss it
+
+    @staticmethod
+    def make(n_first, n_steps, min_steps, tolerance, allowed_fraction, dtype) -> "_Schedule":
+        i32 = lambda v: jnp.asarray(v, jnp.int32)  # noqa: E731
+        return _Schedule(
+            i32(n_first), i32(n_steps), i32(min_steps), jnp.asarray(tolerance, dtype),
+            jnp.asarray(allowed_fraction, dtype),
+        )  # fmt: skip
 
 
 def _sweep_plan(res: int, k0: int) -> tuple[np.ndarray, np.ndarray]:
@@ -281,26 +287,26 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
     """Coefficients (res, n, 3), residuals (res, n) and LM iterations (res,) for one block of
     columns with directions e (n, 3).
 
-    One `lax.scan` over the brightness nodes in `_sweep_plan` order (a single compiled
-    Gauss-Newton loop), then the in-block repair; row 0 (black) is a placeholder that the
-    caller sets.
+    One `lax.scan` over the brightness nodes in `_sweep_plan` order: a single compiled
+    Gauss-Newton loop whose iteration count adapts to the block (a step ends once all but
+    `allowed_fraction` of the block's columns reach the tolerance). Row 0 (black) is a
+    placeholder that the caller sets.
     """
     res = scale.shape[0]
     n = e.shape[0]
     dtype = e.dtype
     order, start = _sweep_plan(res, k0)
-    max_steps = np.where(start == 0, schedule.n_first, schedule.n_steps).astype(np.int32)
 
     def step(carry, xs):
         c_prev, c_k0 = carry
-        k, how, n_max = xs
+        k, how = xs
         c_start = jnp.where(how == 0, 0.0, jnp.where(how == 1, c_prev, c_k0)).astype(dtype)
         lab_t = target_Lab(e * scale[k], m)
         n_it, s = lm_solve(
             lm_init(c_start, lab_t, m),
             lab_t,
             m,
-            n_max,
+            jnp.where(how == 0, schedule.n_first, schedule.n_steps),
             schedule.tolerance,
             min_steps=schedule.min_steps,
             allowed_fraction=schedule.allowed_fraction,
@@ -309,55 +315,25 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
         return (s.c, c_k0), (s.c, jnp.sqrt(s.cost), n_it)
 
     zeros = jnp.zeros((n, 3), dtype)
-    xs = (jnp.asarray(order), jnp.asarray(start), jnp.asarray(max_steps))
-    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), xs)
+    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), (jnp.asarray(order), jnp.asarray(start)))
     # Back to brightness order; row 0 = copy of row 1 (placeholder).
     inv = np.argsort(order)
     coeffs = jnp.concatenate([cs[inv][:1], cs[inv]], axis=0)
     resid = jnp.concatenate([jnp.zeros_like(rs[:1]), rs[inv]], axis=0)
     iterations = jnp.concatenate([jnp.zeros_like(its[:1]), its[inv]], axis=0)
-    if schedule.repair_capacity > 0:
-        coeffs, resid = _repair_in_jit(coeffs, resid, e, scale, m, schedule)
     return coeffs, resid, iterations
 
 
-def _repair_in_jit(coeffs, resid, e, scale, m, schedule: _Schedule):
-    """Refit the block's worst `repair_capacity` entries (fixed capacity: compiled once).
+def _make_fit_fn(m: ModelArrays, scale, k0, chunk: int, mesh=None):
+    """jit-compiled fit `(e (n, 3), schedule) -> (coeffs (res, n, 3), resid (res, n), its)`.
 
-    From their own state with `repair_steps` more iterations, then (the worst quarter of
-    those) from the solution one brightness node above, the other side of the sweep's
-    continuation. What is still above the tolerance goes to the host-side `_repair` (rare).
+    The columns are processed in blocks of `chunk` by `lax.map` (cache blocking: each block's
+    (chunk, n_lambda) arrays stay in cache through the whole sweep, and each block adapts its
+    own iteration counts), and with a `mesh` the blocks are sharded over its devices
+    (`jax.shard_map` over the column axis).
     """
-    res, n = resid.shape
-    cap = min(schedule.repair_capacity, (res - 1) * n)
 
-    def refit(coeffs, resid, cap, k_offset):
-        _, idx = lax.top_k(resid.at[0].set(0.0).reshape(-1), cap)
-        ks, cols = idx // n, idx % n
-        ks_start = jnp.clip(ks + k_offset, 1, res - 1)
-        lab_t = target_Lab(e[cols] * scale[ks][:, None], m)
-        st = lm_iterate(lm_init(coeffs[ks_start, cols], lab_t, m), lab_t, m, schedule.repair_steps)
-        r_new = jnp.sqrt(st.cost)
-        better = r_new < resid[ks, cols]
-        coeffs = coeffs.at[ks, cols].set(jnp.where(better[:, None], st.c, coeffs[ks, cols]))
-        resid = resid.at[ks, cols].set(jnp.where(better, r_new, resid[ks, cols]))
-        return coeffs, resid
-
-    coeffs, resid = refit(coeffs, resid, cap, 0)
-    coeffs, resid = refit(coeffs, resid, max(1, cap // 4), 1)
-    return coeffs, resid
-
-
-def _make_fit_fn(m: ModelArrays, scale, k0, schedule: _Schedule, mesh=None):
-    """jit-compiled fit of all columns (n, 3) -> (coeffs (res, n, 3), resid (res, n), its).
-
-    The columns are processed in blocks of `schedule.chunk` by `lax.map` (cache blocking: each
-    block's (chunk, n_lambda) arrays stay in cache through the whole sweep), and with a `mesh`
-    the blocks are sharded over its devices (`jax.shard_map` over the column axis).
-    """
-    chunk = schedule.chunk
-
-    def blocks(e):
+    def blocks(e, schedule):
         nb = e.shape[0] // chunk
         c, r, it = lax.map(lambda eb: _fit_columns(eb, scale, k0, m, schedule), e.reshape(nb, chunk, 3))
         res = scale.shape[0]
@@ -369,12 +345,16 @@ def _make_fit_fn(m: ModelArrays, scale, k0, schedule: _Schedule, mesh=None):
         return jax.jit(blocks)
     from jax.sharding import PartitionSpec as P
 
-    def sharded(e):
-        c, r, it = blocks(e)
+    def sharded(e, schedule):
+        c, r, it = blocks(e, schedule)
         return c, r, jax.lax.psum(it, "columns")
 
     fn = jax.shard_map(
-        sharded, mesh=mesh, in_specs=P("columns"), out_specs=(P(None, "columns"), P(None, "columns"), P())
+        sharded,
+        mesh=mesh,
+        in_specs=(P("columns"), P()),
+        out_specs=(P(None, "columns"), P(None, "columns"), P()),
+        check_vma=False,  # the loops mix replicated and per-device values; all are per-block
     )
     return jax.jit(fn)
 
@@ -429,9 +409,9 @@ def fit_lut(
     n_first: int = 60,
     n_steps: int = 12,
     min_steps: int = 2,
-    allowed_fraction: float = 1e-3,
-    repair_fraction: float = 1 / 64,
-    repair_steps: int = 20,
+    allowed_fraction: float = 2e-3,
+    retry_steps: int = 60,
+    repair_steps: int = 60,
     repair_rounds: int = 3,
     chunk: int = 512,
     blocks_per_call: int = 2,
@@ -444,27 +424,32 @@ def fit_lut(
 
     See the module docstring for the layout, the sweep along brightness and the explicit
     black / grey / white entries. The work is vectorised over the 3 res^2 columns of the table
-    and, with `devices`, sharded over them (`jax.shard_map` over the flattened column axis;
-    e.g. `devices=jax.devices()` after `XLA_FLAGS=--xla_force_host_platform_device_count=2` uses
-    both cores of a 2-core CPU as two devices).
+    in cache-sized blocks and, with `devices`, sharded over them (`jax.shard_map` over the
+    flattened column axis; e.g. `devices=jax.devices()` after
+    `XLA_FLAGS=--xla_force_host_platform_device_count=2` runs a 2-core CPU as two devices).
+
+    Stages: (1) the sweep, every column; a brightness step ends once all but
+    `allowed_fraction` of its block's columns are within `tolerance / 10`, or after `n_steps`
+    iterations; (2) the columns with an entry above `tolerance` are swept again with up to
+    `retry_steps` iterations per step and no early exit (the same compiled function), keeping
+    the better entry; (3) whatever is still above `tolerance` is refitted from its neighbours
+    along brightness (`repair_rounds` rounds of `repair_steps` iterations; rarely needed).
 
     **Arguments:**
 
     - `colourspace`: a space of `colorimetry.RGB_COLOURSPACES` (name or alias).
     - `resolution`: table size per axis, >= 2 (pbrt and Mitsuba use 64).
     - `dtype`: working and storage dtype (float32 default; float64 for reference fits).
-    - `tolerance`: per-entry convergence criterion on $\Delta E^*_{ab}$. [-]
-    - `n_first`, `n_steps`: most Gauss-Newton iterations for the cold start and per
-        brightness step; `min_steps`: fewest per step; a step ends early once no more than
-        `allowed_fraction` of the columns miss the tolerance (those go to the repair pass);
-        `repair_fraction`, `repair_steps`: capacity (fraction of a block's entries) and
-        iterations of the in-block repair; `repair_rounds`: host-side repair rounds after it.
+    - `tolerance`: per-entry convergence criterion on $\Delta E^*_{ab}$ (the float32 floor
+        is about 2e-3 next to white). [-]
+    - `n_first`, `n_steps`, `min_steps`, `allowed_fraction`, `retry_steps`, `repair_steps`,
+        `repair_rounds`: iteration limits of the stages above.
     - `chunk`: table columns per vectorised block (cache blocking); `blocks_per_call`:
         blocks per device per compiled call (the granularity of `progress`).
     - `step_nm`: quadrature step of the forward model (1 nm default). [nm]
     - `devices`: sequence of devices to shard the columns over (None: default device).
     - `progress`: optional callable `progress(stage: str, done: int, total: int)`.
-    - `throw`: raise `RuntimeError` if an entry misses the tolerance after the repair pass.
+    - `throw`: raise `RuntimeError` if an entry misses the tolerance at the end.
 
     **Returns:**
 
@@ -491,70 +476,70 @@ def fit_lut(
     e_np = _column_directions(res, np.float64)
     n_cols = e_np.shape[0]
     n_dev = 1 if devices is None else len(devices)
-    chunk = check_positive_int(chunk, "chunk")
-    chunk = min(chunk, -(-n_cols // n_dev))
-    schedule = _Schedule(
-        n_first=n_first,
-        n_steps=n_steps,
-        min_steps=min_steps,
-        tolerance=float(tolerance),
-        allowed_fraction=float(allowed_fraction),
-        chunk=chunk,
-        repair_capacity=int(round(repair_fraction * chunk * (res - 1))),
-        repair_steps=repair_steps,
-    )
-    mesh = None
+    chunk = min(check_positive_int(chunk, "chunk"), -(-n_cols // n_dev))
+    blocks_per_call = check_positive_int(blocks_per_call, "blocks_per_call")
+    mesh = sharding = None
     if n_dev > 1:
-        from jax.sharding import Mesh
+        from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
         mesh = Mesh(np.asarray(devices), ("columns",))
-    # Work in groups of blocks (one compiled call each) so progress can be reported.
-    per_call = n_dev * chunk * blocks_per_call
-    n_calls = -(-n_cols // per_call)
-    pad = n_calls * per_call - n_cols
-    e_pad = np.concatenate([e_np, np.tile(e_np[:1], (pad, 1))]) if pad else e_np
-    fit_fn = _make_fit_fn(m, scale, k0, schedule, mesh)
-    sharding = None
-    if mesh is not None:
-        from jax.sharding import NamedSharding, PartitionSpec as P
-
         sharding = NamedSharding(mesh, P("columns"))
-    parts_c, parts_r = [], []
-    iterations = np.zeros(res, np.int64)
-    if progress is not None:
-        progress("sweep", 0, n_cols)
-    for i in range(n_calls):
-        e = jnp.asarray(e_pad[i * per_call : (i + 1) * per_call], dtype)
-        if sharding is not None:
-            e = jax.device_put(e, sharding)
-        c, r, it = fit_fn(e)
-        parts_c.append(np.asarray(c))
-        parts_r.append(np.asarray(r))
-        iterations += np.asarray(it)
-        if progress is not None:
-            progress("sweep", min((i + 1) * per_call, n_cols), n_cols)
-    coeffs = np.concatenate(parts_c, axis=1)[:, :n_cols]  # (res, n_cols, 3), normalised
-    resid = np.concatenate(parts_r, axis=1)[:, :n_cols]
+    fit_fn = _make_fit_fn(m, scale, k0, chunk, mesh)
+    per_call = n_dev * chunk * blocks_per_call
+    sweep_tol = tolerance / 10
 
-    # Explicit entries: greys (closed form), white (finite), black row (copy of row 1).
+    def run(cols: np.ndarray, schedule: _Schedule, stage: str):
+        """Sweep the columns `cols` in calls of `per_call` columns (padded by repetition)."""
+        n_calls = -(-cols.size // per_call)
+        idx = np.resize(cols, n_calls * per_call) if cols.size else cols
+        out_c = np.empty((res, n_calls * per_call, 3), dtype)
+        out_r = np.empty((res, n_calls * per_call), dtype)
+        its = np.zeros(res, np.int64)
+        for i in range(n_calls):
+            sl = slice(i * per_call, (i + 1) * per_call)
+            e = jnp.asarray(e_np[idx[sl]], dtype)
+            if sharding is not None:
+                e = jax.device_put(e, sharding)
+            c, r, it = fit_fn(e, schedule)
+            out_c[:, sl], out_r[:, sl] = np.asarray(c), np.asarray(r)
+            its += np.asarray(it)
+            if progress is not None:
+                progress(stage, min((i + 1) * per_call, cols.size), cols.size)
+        return out_c[:, : cols.size], out_r[:, : cols.size], its
+
+    # (1) The sweep.
+    sched = _Schedule.make(n_first, n_steps, min_steps, sweep_tol, allowed_fraction, dtype)
+    coeffs, resid, iterations = run(np.arange(n_cols), sched, "sweep")
+    # Explicit entries: greys (closed form), white (finite), black row (copy of row 1, later).
     exact = np.zeros((res, n_cols), dtype=bool)
+    exact[0] = True
     grey_cols = np.flatnonzero((e_np[:, 0] == 1) & (e_np[:, 1] == 1) & (e_np[:, 2] == 1))
     with jax.enable_x64(dtype == jnp.dtype(jnp.float64)):
         g = np.array(grey_coefficients(jnp.asarray(scale_np, dtype)))
     g[-1, 2] = WHITE_C2
-    for col in grey_cols:
-        coeffs[:, col] = g
-        resid[:, col] = 0.0
-        exact[:, col] = True
+    coeffs[:, grey_cols] = g[:, None, :]
+    resid[:, grey_cols] = 0.0
+    exact[:, grey_cols] = True
+    resid[0] = 0.0
+    # (2) Retry the columns with an entry above the tolerance, with more iterations.
+    bad_cols = np.flatnonzero(((resid > tolerance) & ~exact).any(axis=0))
+    n_retried = int(bad_cols.size)
+    if bad_cols.size:
+        sched2 = _Schedule.make(2 * n_first, retry_steps, min_steps, sweep_tol, 0.0, dtype)
+        c2, r2, it2 = run(bad_cols, sched2, "retry")
+        iterations += it2
+        better = (r2 < resid[:, bad_cols]) & ~exact[:, bad_cols]
+        sub_c, sub_r = coeffs[:, bad_cols], resid[:, bad_cols]
+        sub_c[better], sub_r[better] = c2[better], r2[better]
+        coeffs[:, bad_cols], resid[:, bad_cols] = sub_c, sub_r
+    # (3) Host-side repair from neighbours for what is left.
     coeffs, resid, n_repaired = _repair(
         coeffs, resid, e_np.astype(dtype), scale_np.astype(dtype), m, tolerance, exact,
-        3 * repair_steps, repair_rounds, None,
+        repair_steps, repair_rounds, None,
     )  # fmt: skip
     if progress is not None:
         progress("repair", 1, 1)
     coeffs[0] = coeffs[1]
-    resid[0] = 0.0
-    exact[0] = True
 
     coeffs_nm = np.array(normalised_to_nm_coefficients(jnp.asarray(coeffs)), dtype=dtype)
     # (res_k, 3 * res_j * res_i, 3) -> (3, res_k, res_j, res_i, 3)
@@ -574,9 +559,11 @@ def fit_lut(
         "n_steps": n_steps,
         "min_steps": min_steps,
         "allowed_fraction": allowed_fraction,
-        "repair_fraction": repair_fraction,
+        "retry_steps": retry_steps,
         "repair_steps": repair_steps,
         "chunk": chunk,
+        "columns_retried": n_retried,
+        "lm_iterations_per_block": float(iterations.sum() / max(1, -(-n_cols // chunk))),
         "repair_rounds": repair_rounds,
         "start_index": k0,
         "white_c2": WHITE_C2,

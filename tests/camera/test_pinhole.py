@@ -175,6 +175,7 @@ def test_rays_match_mitsuba_perspective_sensor():
         (CORNELL_TO_WORLD, 30.0, 160, 90, "y"),
         (CORNELL_TO_WORLD, 60.0, 100, 150, "diagonal"),
         (CORNELL_TO_WORLD, 35.0, 150, 100, "larger"),
+        (CORNELL_TO_WORLD, 45.0, 200, 120, "smaller"),
     ]  # fmt: skip
     raster = np.array([[0.5, 0.5], [12.25, 80.0], [0.0, 0.0], [99.0, 3.0], [50.0, 45.0]])
     for to_world, fov, w, h, axis in cases:

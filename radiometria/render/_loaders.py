@@ -1,0 +1,636 @@
+"""Mesh files (OBJ, PLY through trimesh) and a Mitsuba 3 XML scene subset (thesis ch. 8).
+
+`load_mitsuba_xml` reads the part of Mitsuba 3's scene format that the renderer can represent,
+and rejects everything else with an error that names the file, the line and the tag:
+
+- `scene`: the `version` attribute; `<default name value>` and `$name` substitution in
+  attribute values.
+- `shape`: `obj`, `ply` (`filename`), `rectangle` ([-1, 1]^2 at z = 0, normal +z), `cube`
+  ([-1, 1]^3), `sphere` (`center`, `radius`; triangulated as an icosphere of
+  `SPHERE_SUBDIVISIONS` = 4 subdivisions, 5120 triangles); `to_world`, `flip_normals`,
+  `face_normals` (ignored); one `bsdf` (inline or `ref`) and one `area` emitter.
+- `transform`: `matrix` (16 values, row-major), `translate`, `rotate` (axis and `angle` in
+  degrees), `scale`, `lookat` (`origin`, `target`, `up`), applied in document order.
+- `bsdf`: `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`,
+  `twosided` (one nested BSDF); an `id` makes it referable by `ref`.
+- `emitter`: `area` inside a shape; `radiance` as `rgb`, `spectrum` (`value="v"` or
+  `"l1:v1, l2:v2, ..."` in nm) or blackbody (`<spectrum type="blackbody">` with
+  `temperature` and optional `scale`, or Mitsuba 0.6's `<blackbody temperature=...>`).
+- `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,
+  diagonal, as Mitsuba), `to_world`, `near_clip`, `far_clip`; nested `film` and `sampler`.
+- `film`: `hdrfilm` `width`, `height` (other options ignored) and an `rfilter`: `box`,
+  `tent`, `gaussian`, `mitchell`, `catmullrom` or `lanczos` with its parameters.
+- `sampler`: any type; `sample_count` becomes the scene's `spp`.
+- `integrator`: `path` with `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters`
+  (ignored).
+
+Textures, other plugins, `include`, shape groups and instances are not supported.
+"""
+
+import math
+import xml.parsers.expat
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ._mesh import TriangleMesh, icosphere
+from ._scene import (
+    CameraDescription,
+    FilmDescription,
+    Material,
+    SceneDescription,
+    SceneError,
+    _assemble,
+    _Shape,
+    look_at,
+)
+
+__all__ = ["SPHERE_SUBDIVISIONS", "load_mesh", "load_mitsuba_xml"]
+
+SPHERE_SUBDIVISIONS = 4  # a Mitsuba `sphere` becomes icosphere(4): 5120 triangles
+
+
+# ---------------------------------------------------------------------------------------------
+# Mesh files
+
+
+def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    if not path.is_file():
+        raise FileNotFoundError(f"{where}mesh file not found: {path}")
+    try:
+        mesh = trimesh.load(str(path), force="mesh", process=False)
+    except Exception as e:  # trimesh raises many types for a bad file
+        raise SceneError(
+            f"{where}{path}: cannot read the mesh ({type(e).__name__}: {e})."
+        ) from None
+    v = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    f = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if f.size == 0:
+        raise SceneError(f"{where}{path}: the file holds no triangles.")
+    return v.reshape(-1, 3), f.reshape(-1, 3)
+
+
+def load_mesh(path) -> TriangleMesh:
+    """Read a triangle mesh from an OBJ, PLY, STL, OFF or glTF file (through trimesh).
+
+    Polygons are triangulated by trimesh; vertices are kept as in the file (no merging or
+    reordering), so face indices match the file's.
+
+    **Arguments:**
+
+    - `path`: the mesh file. Vertex coordinates are in the file's length unit.
+
+    **Returns:**
+
+    A `TriangleMesh` (without materials). [file length unit]
+
+    **Raises:**
+
+    `FileNotFoundError` for a missing file, `SceneError` (a `ValueError`) naming the file when
+    it cannot be read or holds no triangles.
+
+    !!! note "Thesis"
+        Ch. 8 (scene geometry); file reading by trimesh (`Dawson-Haggerty2019`).
+    """
+    v, f = _read_mesh(Path(path), "")
+    return TriangleMesh(v, f.astype(np.int32))
+
+
+# ---------------------------------------------------------------------------------------------
+# A small XML tree with line numbers (expat reports the line of each start tag)
+
+
+@dataclass
+class _Node:
+    tag: str
+    attrib: dict
+    line: int
+    children: list = field(default_factory=list)
+
+
+def _parse_xml(text: str, file: str) -> _Node:
+    parser = xml.parsers.expat.ParserCreate()
+    stack: list[_Node] = []
+    root: list[_Node] = []
+
+    def start(tag, attrib):
+        node = _Node(tag, dict(attrib), parser.CurrentLineNumber)
+        if stack:
+            stack[-1].children.append(node)
+        else:
+            root.append(node)
+        stack.append(node)
+
+    def end(tag):
+        stack.pop()
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        parser.Parse(text, True)
+    except xml.parsers.expat.ExpatError as e:
+        msg = xml.parsers.expat.ErrorString(e.code)
+        raise SceneError(f"{file}:{e.lineno}:{e.offset}: malformed XML: {msg}.") from None
+    return root[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# Value parsing
+
+
+class _Ctx:
+    def __init__(self, file: str, base: Path, params: dict):
+        self.file, self.base, self.params = file, base, params
+        self.refs: dict[str, tuple[_Node, object]] = {}
+
+    def err(self, node: _Node, msg: str) -> SceneError:
+        return SceneError(f"{self.file}:{node.line}: <{node.tag}>: {msg}")
+
+    def attr(self, node: _Node, key: str, default=None) -> str:
+        if key not in node.attrib:
+            if default is not None:
+                return default
+            raise self.err(node, f"missing attribute '{key}'")
+        return self.subst(node, node.attrib[key])
+
+    def subst(self, node: _Node, value: str) -> str:
+        if "$" not in value:
+            return value
+        out = value
+        for name in sorted(self.params, key=len, reverse=True):
+            out = out.replace("$" + name, str(self.params[name]))
+        if "$" in out:
+            raise self.err(node, f"no value for the parameter in {value!r} (add a <default>)")
+        return out
+
+    def floats(self, node: _Node, text: str, n: int | None = None) -> np.ndarray:
+        try:
+            vals = np.array([float(x) for x in text.replace(",", " ").split()], dtype=np.float64)
+        except ValueError:
+            raise self.err(node, f"expected numbers, got {text!r}") from None
+        if n is not None and vals.size != n:
+            raise self.err(node, f"expected {n} numbers, got {vals.size} in {text!r}")
+        if not np.all(np.isfinite(vals)):
+            raise self.err(node, f"non-finite number in {text!r}")
+        return vals
+
+
+def _vec3(ctx: _Ctx, node: _Node, default: float = 0.0) -> np.ndarray:
+    """`value="x, y, z"` (or one number), or `x`, `y`, `z` attributes."""
+    if "value" in node.attrib:
+        v = ctx.floats(node, ctx.attr(node, "value"))
+        if v.size == 1:
+            return np.repeat(v, 3)
+        if v.size != 3:
+            raise ctx.err(node, f"expected 1 or 3 numbers, got {v.size}")
+        return v
+    return np.array([float(ctx.floats(node, ctx.attr(node, k, str(default)), 1)[0]) for k in "xyz"])
+
+
+def _rotation(axis: np.ndarray, angle_deg: float) -> np.ndarray:
+    norm = np.linalg.norm(axis)
+    if norm == 0:
+        raise ValueError("zero rotation axis")
+    x, y, z = axis / norm
+    a = math.radians(angle_deg)
+    c, s = math.cos(a), math.sin(a)
+    m = np.eye(4)
+    m[:3, :3] = [
+        [c + x * x * (1 - c), x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+        [y * x * (1 - c) + z * s, c + y * y * (1 - c), y * z * (1 - c) - x * s],
+        [z * x * (1 - c) - y * s, z * y * (1 - c) + x * s, c + z * z * (1 - c)],
+    ]
+    return m
+
+
+def _transform(ctx: _Ctx, node: _Node) -> np.ndarray:
+    m = np.eye(4)
+    for op in node.children:
+        t = np.eye(4)
+        if op.tag == "matrix":
+            t = ctx.floats(op, ctx.attr(op, "value"), 16).reshape(4, 4)
+        elif op.tag == "translate":
+            t[:3, 3] = _vec3(ctx, op, 0.0)
+        elif op.tag == "scale":
+            t[:3, :3] = np.diag(_vec3(ctx, op, 1.0))
+        elif op.tag == "rotate":
+            axis = _vec3(ctx, op, 0.0)
+            angle = float(ctx.floats(op, ctx.attr(op, "angle"), 1)[0])
+            try:
+                t = _rotation(axis, angle)
+            except ValueError:
+                raise ctx.err(op, "the rotation axis is zero") from None
+        elif op.tag == "lookat":
+            try:
+                t = look_at(
+                    ctx.floats(op, ctx.attr(op, "origin"), 3),
+                    ctx.floats(op, ctx.attr(op, "target"), 3),
+                    ctx.floats(op, ctx.attr(op, "up", "0, 1, 0"), 3),
+                )
+            except ValueError as e:
+                raise ctx.err(op, str(e)) from None
+        else:
+            raise ctx.err(op, f"unsupported transform element <{op.tag}> (line {op.line})")
+        m = t @ m
+    return m
+
+
+def _spectrum_value(ctx: _Ctx, node: _Node) -> dict:
+    """rgb / spectrum / blackbody / float property -> a spectral parameter dict."""
+    if node.tag == "rgb":
+        text = ctx.attr(node, "value").strip()
+        if text.startswith("#") and len(text) == 7:
+            srgb = np.array([int(text[i : i + 2], 16) / 255.0 for i in (1, 3, 5)])
+            lin = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
+            return {"rgb": lin}
+        return {"rgb": ctx.floats(node, text, 3)}
+    if node.tag == "float":
+        return {"value": float(ctx.floats(node, ctx.attr(node, "value"), 1)[0])}
+    if node.tag == "blackbody":  # Mitsuba 0.6
+        temp = ctx.attr(node, "temperature").strip().rstrip("Kk")
+        scale = ctx.attr(node, "scale", "1")
+        t = float(ctx.floats(node, temp, 1)[0])
+        if t <= 0:
+            raise ctx.err(node, f"temperature must be > 0 [K], got {t}")
+        return {"blackbody": {"temperature": t, "scale": float(ctx.floats(node, scale, 1)[0])}}
+    if node.tag == "spectrum":
+        kind = ctx.attr(node, "type", "")
+        if kind == "blackbody":
+            props = _properties(ctx, node, {"temperature", "scale"})
+            t = props.get("temperature", {}).get("value")
+            if t is None or t <= 0:
+                raise ctx.err(node, "a blackbody spectrum needs a temperature > 0 [K]")
+            scale = props.get("scale", {"value": 1.0})["value"]
+            return {"blackbody": {"temperature": t, "scale": scale}}
+        if kind:
+            raise ctx.err(node, f"unsupported spectrum type {kind!r} (line {node.line})")
+        if "filename" in node.attrib:
+            raise ctx.err(node, "spectrum files are not supported; give value='l1:v1, ...'")
+        text = ctx.attr(node, "value")
+        if ":" not in text:
+            return {"value": float(ctx.floats(node, text, 1)[0])}
+        pairs = [p.split(":") for p in text.replace(",", " ").split()]
+        try:
+            wl = np.array([float(a) for a, _ in pairs])
+            val = np.array([float(b) for _, b in pairs])
+        except ValueError:
+            raise ctx.err(node, f"expected 'wavelength:value' pairs, got {text!r}") from None
+        if len(wl) < 2 or np.any(np.diff(wl) <= 0):
+            raise ctx.err(node, "expected >= 2 strictly increasing wavelengths [nm]")
+        return {"spectrum": (wl, val)}
+    if node.tag == "texture":
+        raise ctx.err(node, f"textures are not supported (line {node.line})")
+    raise ctx.err(node, f"expected a spectrum (rgb, spectrum, float), got <{node.tag}>")
+
+
+_VALUE_TAGS = ("integer", "float", "boolean", "string", "rgb", "spectrum", "blackbody", "point",
+               "vector", "transform", "texture")  # fmt: skip
+
+
+def _properties(ctx: _Ctx, node: _Node, allowed: set[str]) -> dict:
+    """Parse the property children of a plugin; nested objects are left to the caller."""
+    out = {}
+    for ch in node.children:
+        if ch.tag not in _VALUE_TAGS:
+            continue
+        name = ctx.attr(ch, "name")
+        if name not in allowed:
+            raise ctx.err(ch, f"unsupported parameter '{name}' of <{node.tag} type="
+                          f"'{node.attrib.get('type', '')}'> (line {ch.line}); supported: "
+                          f"{sorted(allowed)}")  # fmt: skip
+        if ch.tag == "integer":
+            try:
+                out[name] = int(ctx.attr(ch, "value"))
+            except ValueError:
+                raise ctx.err(ch, f"expected an integer, got {ch.attrib.get('value')!r}") from None
+        elif ch.tag == "boolean":
+            v = ctx.attr(ch, "value").strip().lower()
+            if v not in ("true", "false"):
+                raise ctx.err(ch, f"expected true or false, got {v!r}")
+            out[name] = v == "true"
+        elif ch.tag == "string":
+            out[name] = ctx.attr(ch, "value")
+        elif ch.tag in ("point", "vector"):
+            out[name] = _vec3(ctx, ch)
+        elif ch.tag == "transform":
+            out[name] = _transform(ctx, ch)
+        else:
+            out[name] = _spectrum_value(ctx, ch)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Plugins
+
+_BSDF_PARAMS = {
+    "diffuse": {"reflectance"},
+    "conductor": {"material", "eta", "k", "specular_reflectance"},
+    "roughconductor": {"material", "eta", "k", "specular_reflectance", "distribution", "alpha",
+                       "alpha_u", "alpha_v", "sample_visible"},
+    "dielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"},
+    "roughdielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
+                        "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"},
+}  # fmt: skip
+_FILTER_PARAMS = {
+    "box": {"radius"},
+    "tent": {"radius"},
+    "gaussian": {"stddev", "radius"},
+    "mitchell": {"B", "C", "radius"},
+    "catmullrom": {"radius"},
+    "lanczos": {"lobes", "radius"},
+}
+_FILTER_DEFAULTS = {
+    "box": {"radius": 0.5},
+    "tent": {"radius": 1.0},
+    "gaussian": {"stddev": 0.5},
+    "mitchell": {"B": 1 / 3, "C": 1 / 3, "radius": 2.0},
+    "catmullrom": {"radius": 2.0},
+    "lanczos": {"lobes": 3, "radius": 3.0},
+}
+
+
+def _only_children(ctx: _Ctx, node: _Node, allowed: set[str]) -> None:
+    for ch in node.children:
+        if ch.tag not in allowed and ch.tag not in _VALUE_TAGS:
+            raise ctx.err(ch, f"unsupported tag <{ch.tag}> inside <{node.tag}> (line {ch.line})")
+
+
+def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
+    kind = ctx.attr(node, "type")
+    name = node.attrib.get("id", name) or f"bsdf@{node.line}"
+    if kind == "twosided":
+        _only_children(ctx, node, {"bsdf"})
+        inner = [c for c in node.children if c.tag == "bsdf"]
+        if len(inner) != 1:
+            raise ctx.err(node, "a twosided BSDF with one nested <bsdf> is supported")
+        if [c for c in node.children if c.tag != "bsdf"]:
+            raise ctx.err(node, "twosided takes no parameters here")
+        idx = _bsdf(ctx, inner[0], materials, name)
+        m = materials[idx]
+        materials[idx] = Material(m.type, m.params, two_sided=True, name=name)
+        return idx
+    if kind not in _BSDF_PARAMS:
+        raise ctx.err(
+            node, f"unsupported BSDF type '{kind}' (line {node.line}); supported: "
+            f"{sorted([*_BSDF_PARAMS, 'twosided'])}"
+        )  # fmt: skip
+    _only_children(ctx, node, set())
+    params = _properties(ctx, node, _BSDF_PARAMS[kind])
+    if kind == "diffuse" and "reflectance" not in params:
+        params["reflectance"] = {"value": 0.5}
+    for key in ("int_ior", "ext_ior"):
+        v = params.get(key)
+        if isinstance(v, str):
+            params[key] = {"name": v}
+    materials.append(Material(kind, params, two_sided=False, name=name))
+    return len(materials) - 1
+
+
+def _emitter(ctx: _Ctx, node: _Node) -> dict:
+    kind = ctx.attr(node, "type")
+    if kind != "area":
+        raise ctx.err(
+            node, f"unsupported emitter type '{kind}' (line {node.line}); only 'area' emitters "
+            "inside a <shape> are supported"
+        )  # fmt: skip
+    _only_children(ctx, node, set())
+    props = _properties(ctx, node, {"radiance"})
+    if "radiance" not in props:
+        raise ctx.err(node, "an area emitter needs a 'radiance'")
+    return {"radiance": props["radiance"], "two_sided": False}
+
+
+_RECT_V = np.array([[-1, -1, 0], [1, -1, 0], [-1, 1, 0], [1, 1, 0]], dtype=np.float64)
+_RECT_F = np.array([[1, 2, 0], [1, 3, 2]])
+# Mitsuba's cube: 4 vertices per face (for face normals), 12 triangles
+_CUBE_V = np.array(
+    [[1, -1, -1], [1, -1, 1], [-1, -1, 1], [-1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, 1, 1],
+     [1, 1, 1], [1, -1, -1], [1, 1, -1], [1, 1, 1], [1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1],
+     [-1, -1, 1], [-1, -1, 1], [-1, 1, 1], [-1, 1, -1], [-1, -1, -1], [1, 1, -1], [1, -1, -1],
+     [-1, -1, -1], [-1, 1, -1]], dtype=np.float64)  # fmt: skip
+_CUBE_F = (np.array([[0, 1, 2], [3, 0, 2]])[None] + 4 * np.arange(6)[:, None, None]).reshape(-1, 3)
+
+_SHAPE_PARAMS = {
+    "obj": {"filename", "to_world", "flip_normals", "face_normals", "flip_tex_coords"},
+    "ply": {"filename", "to_world", "flip_normals", "face_normals"},
+    "rectangle": {"to_world", "flip_normals"},
+    "cube": {"to_world", "flip_normals"},
+    "sphere": {"to_world", "flip_normals", "center", "radius"},
+}
+
+
+def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> _Shape:
+    kind = ctx.attr(node, "type")
+    if kind not in _SHAPE_PARAMS:
+        raise ctx.err(
+            node, f"unsupported shape type '{kind}' (line {node.line}); supported: "
+            f"{sorted(_SHAPE_PARAMS)}"
+        )  # fmt: skip
+    _only_children(ctx, node, {"bsdf", "emitter", "ref"})
+    props = _properties(ctx, node, _SHAPE_PARAMS[kind])
+    where = f"{ctx.file}:{node.line}: shape '{node.attrib.get('id', kind)}'"
+    if kind in ("obj", "ply"):
+        if "filename" not in props:
+            raise ctx.err(node, f"a '{kind}' shape needs a 'filename'")
+        path = Path(props["filename"])
+        if not path.is_absolute():
+            path = ctx.base / path
+        v, f = _read_mesh(path, f"{ctx.file}:{node.line}: ")
+    elif kind == "rectangle":
+        v, f = _RECT_V.copy(), _RECT_F.copy()
+    elif kind == "cube":
+        v, f = _CUBE_V.copy(), _CUBE_F.copy()
+    else:
+        v, f = icosphere(SPHERE_SUBDIVISIONS)
+        radius = props.get("radius", {"value": 1.0})
+        if "value" not in radius or radius["value"] <= 0:
+            raise ctx.err(node, "the sphere 'radius' must be a float > 0")
+        v = v * radius["value"] + props.get("center", np.zeros(3))
+    m = props.get("to_world", np.eye(4))
+    v = v @ m[:3, :3].T + m[:3, 3]
+    if props.get("flip_normals", False):
+        f = f[:, [0, 2, 1]]
+    material = None
+    emitter = None
+    for ch in node.children:
+        if ch.tag == "bsdf":
+            if material is not None:
+                raise ctx.err(ch, "a shape takes one BSDF")
+            material = _bsdf(ctx, ch, materials)
+        elif ch.tag == "ref":
+            rid = ctx.attr(ch, "id")
+            if rid not in ctx.refs:
+                raise ctx.err(ch, f"unknown id '{rid}' (define it before its use)")
+            ref_node, ref_value = ctx.refs[rid]
+            if ref_node.tag != "bsdf":
+                raise ctx.err(ch, f"'{rid}' is a <{ref_node.tag}>; only BSDFs can be referenced")
+            if material is not None:
+                raise ctx.err(ch, "a shape takes one BSDF")
+            material = ref_value
+        elif ch.tag == "emitter":
+            if emitter is not None:
+                raise ctx.err(ch, "a shape takes one emitter")
+            emitter = _emitter(ctx, ch)
+    if material is None:  # Mitsuba's default: diffuse, reflectance 0.5
+        if not default_material:
+            materials.append(Material("diffuse", {"reflectance": {"value": 0.5}}, name="default"))
+            default_material.append(len(materials) - 1)
+        material = default_material[0]
+    name = node.attrib.get("id", f"{kind}@{node.line}")
+    return _Shape(name, v, f, material, emitter, where=where)
+
+
+def _sensor(ctx: _Ctx, node: _Node):
+    kind = ctx.attr(node, "type")
+    if kind != "perspective":
+        raise ctx.err(
+            node, f"unsupported sensor type '{kind}' (line {node.line}); only 'perspective'"
+        )
+    _only_children(ctx, node, {"film", "sampler"})
+    props = _properties(
+        ctx, node, {"fov", "fov_axis", "focal_length", "to_world", "near_clip", "far_clip",
+                    "focus_distance", "principal_point_offset_x", "principal_point_offset_y"}
+    )  # fmt: skip
+    axis = props.get("fov_axis", "x")
+    if axis not in ("x", "y", "diagonal", "smaller", "larger"):
+        raise ctx.err(node, f"unknown fov_axis {axis!r}")
+    if "fov" in props:
+        fov = props["fov"].get("value")
+    else:
+        f_mm = props.get("focal_length", "50mm").strip().removesuffix("mm")
+        f_mm = float(ctx.floats(node, f_mm, 1)[0])
+        fov = math.degrees(2 * math.atan(math.hypot(36.0, 24.0) / (2 * f_mm)))
+        axis = "diagonal"
+    if fov is None or not 0 < fov < 180:
+        raise ctx.err(node, f"fov must be in (0, 180) degrees, got {fov}")
+    camera = CameraDescription(
+        to_world=props.get("to_world", np.eye(4)),
+        fov_deg=float(fov),
+        fov_axis=axis,
+        near_clip=float(props.get("near_clip", {"value": 1e-2})["value"]),
+        far_clip=float(props.get("far_clip", {"value": 1e4})["value"]),
+    )
+    film = FilmDescription(width=768, height=576)
+    spp = None
+    for ch in node.children:
+        if ch.tag == "film":
+            film = _film(ctx, ch)
+        elif ch.tag == "sampler":
+            _only_children(ctx, ch, set())
+            sp = _properties(ctx, ch, {"sample_count", "seed", "jitter", "scramble_seed"})
+            spp = sp.get("sample_count")
+    return camera, film, spp
+
+
+def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
+    kind = ctx.attr(node, "type")
+    if kind != "hdrfilm":
+        raise ctx.err(node, f"unsupported film type '{kind}' (line {node.line}); only 'hdrfilm'")
+    _only_children(ctx, node, {"rfilter"})
+    props = _properties(
+        ctx, node, {"width", "height", "pixel_format", "component_format", "file_format",
+                    "crop_offset_x", "crop_offset_y", "crop_width", "crop_height",
+                    "sample_border", "compensate", "banner"}
+    )  # fmt: skip
+    width, height = props.get("width", 768), props.get("height", 576)
+    if width < 1 or height < 1:
+        raise ctx.err(node, f"width and height must be >= 1 [px], got {width} x {height}")
+    kind_f, params = "gaussian", dict(_FILTER_DEFAULTS["gaussian"])
+    for ch in node.children:
+        if ch.tag == "rfilter":
+            kind_f = ctx.attr(ch, "type")
+            if kind_f not in _FILTER_PARAMS:
+                raise ctx.err(ch, f"unsupported rfilter type '{kind_f}' (line {ch.line})")
+            _only_children(ctx, ch, set())
+            p = _properties(ctx, ch, _FILTER_PARAMS[kind_f])
+            params = dict(_FILTER_DEFAULTS[kind_f])
+            params.update({k: (v["value"] if isinstance(v, dict) else v) for k, v in p.items()})
+    if kind_f == "gaussian" and "radius" not in params:
+        params["radius"] = 4.0 * params["stddev"]
+    return FilmDescription(width=width, height=height, filter=kind_f, filter_params=params)
+
+
+def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
+    """Load a Mitsuba 3 XML scene (the subset in the module docstring of
+    `radiometria.render._loaders`) into a `SceneDescription`.
+
+    Meshes are transformed to world space and merged; each `bsdf` becomes a `Material` (a
+    `ref` reuses the referenced one; a shape without one gets Mitsuba's default, diffuse 0.5);
+    an `area` emitter becomes an `AreaEmitter` on its shape's triangles. Without a sensor, the
+    camera is Mitsuba's default (identity `to_world`, 45 degrees) with a 768 x 576 film.
+
+    **Arguments:**
+
+    - `path`: the `.xml` file; relative mesh file names are relative to its folder.
+    - `params`: values for `$name` substitutions; they override the file's `<default>` tags.
+
+    **Returns:**
+
+    A `SceneDescription` (coordinates in the file's length unit).
+
+    **Raises:**
+
+    `FileNotFoundError` for a missing scene or mesh file; `SceneError` (a `ValueError`)
+    naming the file and the line for malformed XML, an unsupported tag, plugin or parameter
+    (its name is in the message), a bad value, a degenerate emitter triangle.
+
+    !!! note "Thesis"
+        Ch. 8 (scene description); Mitsuba 3's scene format (`Jakob2022`).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"scene file not found: {path}") from None
+    file = str(path)
+    root = _parse_xml(text, file)
+    ctx = _Ctx(file, path.parent, {})
+    if root.tag != "scene":
+        raise ctx.err(root, f"the root element must be <scene>, got <{root.tag}>")
+    for ch in root.children:
+        if ch.tag == "default":
+            ctx.params.setdefault(ctx.attr(ch, "name"), ch.attrib.get("value", ""))
+    for k, v in (params or {}).items():
+        ctx.params[k] = v
+    materials: list[Material] = []
+    default_material: list[int] = []
+    shapes: list[_Shape] = []
+    camera = CameraDescription(to_world=np.eye(4), fov_deg=45.0, fov_axis="x")
+    film = FilmDescription(width=768, height=576)
+    spp = None
+    max_depth: int | None = None
+    rr_depth = 5
+    for ch in root.children:
+        if ch.tag == "default":
+            continue
+        if ch.tag == "bsdf":
+            idx = _bsdf(ctx, ch, materials)
+            if "id" in ch.attrib:
+                ctx.refs[ch.attrib["id"]] = (ch, idx)
+        elif ch.tag == "shape":
+            shapes.append(_shape(ctx, ch, materials, default_material))
+        elif ch.tag == "sensor":
+            camera, film, spp = _sensor(ctx, ch)
+        elif ch.tag == "integrator":
+            kind = ctx.attr(ch, "type")
+            if kind != "path":
+                raise ctx.err(
+                    ch, f"unsupported integrator type '{kind}' (line {ch.line}); only 'path'"
+                )
+            _only_children(ctx, ch, set())
+            p = _properties(ctx, ch, {"max_depth", "rr_depth", "hide_emitters"})
+            md = p.get("max_depth", -1)
+            if md == 0 or md < -1:
+                raise ctx.err(ch, f"max_depth must be -1 (unbounded) or >= 1, got {md}")
+            max_depth = None if md == -1 else md
+            rr_depth = p.get("rr_depth", 5)
+        else:
+            what = f" type='{ch.attrib['type']}'" if "type" in ch.attrib else ""
+            raise ctx.err(ch, f"unsupported tag <{ch.tag}{what}> at line {ch.line}")
+    return _assemble(
+        shapes, materials, camera, film, max_depth=max_depth, rr_depth=rr_depth, spp=spp,
+        unit="file units", source=file,
+    )  # fmt: skip
