@@ -38,8 +38,8 @@ def fig_5_point_sets(out_dir, *, smoke: bool = False):
             ax.axhline(t, color="0.88", lw=0.5, zorder=0)
             ax.axvline(t, color="0.88", lw=0.5, zorder=0)
         ax.scatter(pts[:, 0], pts[:, 1], s=6, color="tab:blue")
-        ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", title=title, xticks=[0, 1], yticks=[0, 1])
-    fig.suptitle(f"{n} points in $[0,1)^2$")
+        ax.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", title=f"{title}, n = {n}")
+        ax.set(xticks=[0, 1], yticks=[0, 1])
     return save(fig, out_dir, "fig_5_point_sets")
 
 
@@ -65,8 +65,12 @@ def fig_6_convergence(out_dir, *, smoke: bool = False):
         ("continuous (kinked), d = 3", "continuous", 3),
         ("discontinuous, d = 2", "discontinuous", 2),
     ]
-    methods = [("mc", "independent"), ("lhs", "Latin hypercube"), ("halton", "Halton (Owen)"),
-               ("sobol", "Sobol (Owen)")]  # fmt: skip
+    methods = [
+        ("mc", "independent"),
+        ("lhs", "Latin hypercube"),
+        ("halton", "Halton (Owen)"),
+        ("sobol", "Sobol (Owen)"),
+    ]
     rng = np.random.default_rng(6)
     fig, axes = plt.subplots(1, len(problems), figsize=(16.0, 4.0), layout="constrained")
     key = jax.random.key(6)
@@ -74,14 +78,17 @@ def fig_6_convergence(out_dir, *, smoke: bool = False):
         f, exact = mc.genz(kind, rng.uniform(0.5, 1.5, d), rng.uniform(0.2, 0.8, d))
         for method, label in methods:
             key, sub = jax.random.split(key)
-            study = mc.convergence_study(f, exact, ns, method=method, dim=d, key=sub,
-                                         n_replicates=reps)  # fmt: skip
-            ax.loglog(ns, np.asarray(study.rmse), "o-", ms=3,
-                      label=f"{label} ({float(study.slope):.2f})")  # fmt: skip
+            study = mc.convergence_study(
+                f, exact, ns, method=method, dim=d, key=sub, n_replicates=reps
+            )
+            ax.loglog(
+                ns, np.asarray(study.rmse), "o-", ms=3, label=f"{label} ({float(study.slope):.2f})"
+            )
         ref = np.asarray(ns, dtype=float)
         top = ax.get_ylim()[1] * 0.3
         ax.loglog(ref, top * (ref / ref[0]) ** -0.5, "k:", lw=0.8)
         ax.loglog(ref, top * (ref / ref[0]) ** -1.5, "k:", lw=0.8)
+        ax.set_xscale("log", base=2)
         ax.set(title=title, xlabel="n", ylabel="RMSE")
         ax.legend(fontsize=7, title="fitted slope", title_fontsize=7)
     return save(fig, out_dir, "fig_6_convergence")
@@ -171,8 +178,11 @@ def _rect_terms(method: str, n: int, key):
         omegas = jnp.stack([mc.spherical_triangle_area(*t) for t in tris])
         idx, _, u0 = mc.sample_discrete(u[:, 0], omegas)
         uu = jnp.stack([u0, u[:, 1]], -1)
-        w = jnp.where((idx == 0)[:, None], mc.sample_spherical_triangle(uu, *tris[0]),
-                      mc.sample_spherical_triangle(uu, *tris[1]))  # fmt: skip
+        w = jnp.where(
+            (idx == 0)[:, None],
+            mc.sample_spherical_triangle(uu, *tris[0]),
+            mc.sample_spherical_triangle(uu, *tris[1]),
+        )
         return w[:, 2] * jnp.sum(omegas)
     if method.startswith("MIS"):
         beta = 2.0 if "power" in method else 1.0
@@ -240,8 +250,11 @@ def fig_7_variance_reduction(out_dir, *, smoke: bool = False):
         terms = _rect_terms(method, 20_000 if smoke else 200_000, sub)
         per_sample_var.append(float(np.var(np.asarray(terms))))
         ax0.loglog(ns, rmse, "o-", ms=3, label=method)
-    ax0.set(xlabel="samples n", ylabel="RMSE of the irradiance",
-            title=f"rectangular light, exact E = {exact:.5f} (eq. 1.13)")  # fmt: skip
+    ax0.set(
+        xlabel="samples n",
+        ylabel="RMSE of the irradiance",
+        title=f"rectangular light, exact E = {exact:.5f} (eq. 1.13)",
+    )
     ax0.legend(fontsize=7)
     y = np.arange(len(RECT_METHODS))
     ax1.barh(y, per_sample_var, color="tab:blue")

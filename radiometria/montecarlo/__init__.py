@@ -37,6 +37,7 @@ from ._estimators import (
     stratified_estimate as stratified_estimate,
     weighted_importance_sampling as weighted_importance_sampling,
 )
+from ._genz import GENZ_FAMILIES as GENZ_FAMILIES, genz as genz
 from ._halton import halton as halton
 from ._heuristics import (
     balance_heuristic as balance_heuristic,
@@ -91,4 +92,3 @@ from ._warps import (
     uniform_triangle_pdf as uniform_triangle_pdf,
     visible_wavelengths_pdf as visible_wavelengths_pdf,
 )
-from ._genz import GENZ_FAMILIES as GENZ_FAMILIES, genz as genz

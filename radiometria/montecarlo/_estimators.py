@@ -534,7 +534,10 @@ def _unit_points(method: str, n: int, d: int, key: Key) -> Array:
 
     dtype = jnp.result_type(float)
     if method == "mc":
-        return jax.random.uniform(key, (n, d), dtype=dtype)
+        # Counter-based hash uniforms: independent, and fused with the integrand by XLA.
+        from ._samplers import hash_uniform
+
+        return hash_uniform(key, n, d, dtype)
     if method == "lhs":
         return latin_hypercube(n, d, key=key)
     if method == "sobol":
@@ -589,7 +592,8 @@ def integrate(
 ) -> Estimate:
     r"""Integrate `f` over a box, the unit hemisphere or the unit sphere.
 
-    Plain MC (`method="mc"`) reports the sample standard error of its `n` points. The other
+    Plain MC (`method="mc"`, independent points from `independent(..., generator="hash")`)
+    reports the sample standard error of its `n` points. The other
     methods (`"stratified"` jittered grid, `"lhs"`, `"sobol"` Owen-scrambled, `"halton"`
     Owen-scrambled, `"lattice"` randomly shifted) are randomised: the estimate is the mean of
     `n_replicates` independent replicates of `n` points each and its variance comes from the

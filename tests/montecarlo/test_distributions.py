@@ -14,9 +14,16 @@ TABLE_2D = jnp.abs(jnp.sin(jnp.arange(48.0).reshape(6, 8))) * jnp.arange(1.0, 9.
 
 def test_piecewise_constant_1d_chi2_and_roundtrip():
     dist = mc.PiecewiseConstant1D(TABLE_1D, 360.0, 830.0)
-    res = mc.chi2_test(lambda u: dist.sample(u[:, 0])[0], dist.pdf, domain="interval",
-                       bounds=(360.0, 830.0), resolution=47, n_samples=100_000, u_dim=1,
-                       key=jax.random.key(0))  # fmt: skip
+    res = mc.chi2_test(
+        lambda u: dist.sample(u[:, 0])[0],
+        dist.pdf,
+        domain="interval",
+        bounds=(360.0, 830.0),
+        resolution=47,
+        n_samples=100_000,
+        u_dim=1,
+        key=jax.random.key(0),
+    )
     assert res.passed, res.message
     u = jax.random.uniform(jax.random.key(1), (2000,))
     x, pdf, off = dist.sample(u)
@@ -28,9 +35,16 @@ def test_piecewise_constant_1d_chi2_and_roundtrip():
 
 def test_piecewise_constant_2d_chi2_and_roundtrip():
     dist = mc.PiecewiseConstant2D(TABLE_2D, bounds=((0.0, 2.0), (-1.0, 1.0)))
-    res = mc.chi2_test(lambda u: dist.sample(u)[0], dist.pdf, domain="square",
-                       bounds=((0.0, 2.0), (-1.0, 1.0)), resolution=(16, 12), n_samples=100_000,
-                       u_dim=2, key=jax.random.key(2))  # fmt: skip
+    res = mc.chi2_test(
+        lambda u: dist.sample(u)[0],
+        dist.pdf,
+        domain="square",
+        bounds=((0.0, 2.0), (-1.0, 1.0)),
+        resolution=(16, 12),
+        n_samples=100_000,
+        u_dim=2,
+        key=jax.random.key(2),
+    )
     assert res.passed, res.message
     u = jax.random.uniform(jax.random.key(3), (2000, 2))
     p, pdf, _ = dist.sample(u)
@@ -124,26 +138,57 @@ def test_samplers_bad_input():
 
 
 def test_chi2_detects_wrong_pdf_and_bad_samples():
-    bad = mc.chi2_test(mc.sample_uniform_hemisphere, lambda w: mc.cosine_hemisphere_pdf(w[:, 2]),
-                       domain="sphere", n_samples=50_000, u_dim=2, key=jax.random.key(8))  # fmt: skip
+    bad = mc.chi2_test(
+        mc.sample_uniform_hemisphere,
+        lambda w: mc.cosine_hemisphere_pdf(w[:, 2]),
+        domain="sphere",
+        n_samples=50_000,
+        u_dim=2,
+        key=jax.random.key(8),
+    )
     assert not bad.passed and bad.p_value < 1e-10
     # A pdf that does not integrate to one.
-    half = mc.chi2_test(mc.sample_uniform_sphere, lambda w: 0.5 * mc.uniform_sphere_pdf(w),
-                        domain="sphere", n_samples=50_000, u_dim=2, key=jax.random.key(9))  # fmt: skip
+    half = mc.chi2_test(
+        mc.sample_uniform_sphere,
+        lambda w: 0.5 * mc.uniform_sphere_pdf(w),
+        domain="sphere",
+        n_samples=50_000,
+        u_dim=2,
+        key=jax.random.key(9),
+    )
     assert not half.passed and "integrates" in half.message
     # Samples where the pdf is zero.
-    out = mc.chi2_test(mc.sample_uniform_sphere, mc.uniform_hemisphere_pdf, domain="sphere",
-                       n_samples=20_000, u_dim=2, key=jax.random.key(10), pdf_tolerance=0.6)  # fmt: skip
+    out = mc.chi2_test(
+        mc.sample_uniform_sphere,
+        mc.uniform_hemisphere_pdf,
+        domain="sphere",
+        n_samples=20_000,
+        u_dim=2,
+        key=jax.random.key(10),
+        pdf_tolerance=0.6,
+    )
     assert not out.passed and out.n_outside_support > 0
     # NaN and off-domain samples.
-    nan = mc.chi2_test(lambda u: jnp.where(u[:, 0] < 0.01, jnp.nan, u[:, 0]), lambda x: jnp.ones_like(x),
-                       domain="interval", n_samples=20_000, u_dim=1, key=jax.random.key(11))  # fmt: skip
+    nan = mc.chi2_test(
+        lambda u: jnp.where(u[:, 0] < 0.01, jnp.nan, u[:, 0]),
+        lambda x: jnp.ones_like(x),
+        domain="interval",
+        n_samples=20_000,
+        u_dim=1,
+        key=jax.random.key(11),
+    )
     assert not nan.passed and nan.n_invalid > 0
 
 
 def test_chi2_sidak_threshold_and_bad_arguments():
-    ok = mc.chi2_test(lambda k: jax.random.uniform(k, (20_000, 2)), lambda x: jnp.ones(x.shape[0]),
-                      domain="square", n_samples=20_000, key=jax.random.key(12), n_tests=10)  # fmt: skip
+    ok = mc.chi2_test(
+        lambda k: jax.random.uniform(k, (20_000, 2)),
+        lambda x: jnp.ones(x.shape[0]),
+        domain="square",
+        n_samples=20_000,
+        key=jax.random.key(12),
+        n_tests=10,
+    )
     assert ok.passed
     assert ok.threshold == pytest.approx(1 - 0.99 ** (1 / 10))
     with pytest.raises(ValueError, match="valid values"):
@@ -151,8 +196,19 @@ def test_chi2_sidak_threshold_and_bad_arguments():
             lambda k: None, lambda x: x, domain="disk", n_samples=10, key=jax.random.key(0)
         )
     with pytest.raises(ValueError, match="shape"):
-        mc.chi2_test(lambda k: jnp.zeros((10, 3)), lambda x: x, domain="square", n_samples=10,
-                     key=jax.random.key(0))  # fmt: skip
+        mc.chi2_test(
+            lambda k: jnp.zeros((10, 3)),
+            lambda x: x,
+            domain="square",
+            n_samples=10,
+            key=jax.random.key(0),
+        )
     with pytest.raises(ValueError, match="bounds"):
-        mc.chi2_test(lambda k: jnp.zeros(10), lambda x: x, domain="interval", bounds=(1.0, 0.0),
-                     n_samples=10, key=jax.random.key(0))  # fmt: skip
+        mc.chi2_test(
+            lambda k: jnp.zeros(10),
+            lambda x: x,
+            domain="interval",
+            bounds=(1.0, 0.0),
+            n_samples=10,
+            key=jax.random.key(0),
+        )

@@ -69,16 +69,26 @@ def test_importance_sampling_unbiased_and_cosine_beats_uniform():
 def test_importance_sampling_accepts_qmc_variates():
     u = mc.sobol(1024, 2, scramble="owen", key=jax.random.key(3))
     est = mc.importance_sampling(
-        radiance_integrand, mc.sample_cosine_hemisphere, lambda w: mc.cosine_hemisphere_pdf(w[:, 2]),
-        u_dim=2, u=u,
-    )  # fmt: skip
+        radiance_integrand,
+        mc.sample_cosine_hemisphere,
+        lambda w: mc.cosine_hemisphere_pdf(w[:, 2]),
+        u_dim=2,
+        u=u,
+    )
     assert est.mean == pytest.approx(EXACT_HEMI, rel=2e-3)
     with pytest.raises(ValueError, match="either `key` or `u`"):
-        mc.importance_sampling(radiance_integrand, mc.sample_cosine_hemisphere, mc.uniform_hemisphere_pdf,
-                               u_dim=2, u=u, key=jax.random.key(0))  # fmt: skip
+        mc.importance_sampling(
+            radiance_integrand,
+            mc.sample_cosine_hemisphere,
+            mc.uniform_hemisphere_pdf,
+            u_dim=2,
+            u=u,
+            key=jax.random.key(0),
+        )
     with pytest.raises(ValueError, match="shape"):
-        mc.importance_sampling(radiance_integrand, mc.sample_cosine_hemisphere, mc.uniform_hemisphere_pdf,
-                               u_dim=3, u=u)  # fmt: skip
+        mc.importance_sampling(
+            radiance_integrand, mc.sample_cosine_hemisphere, mc.uniform_hemisphere_pdf, u_dim=3, u=u
+        )
 
 
 STRATEGIES = [
@@ -224,8 +234,13 @@ def test_integrate_directions(domain, exact):
 
 
 def test_integrate_scaled_box():
-    est = mc.integrate(lambda x: x[:, 0] * x[:, 1], ((0.0, 2.0), (1.0, 4.0)), 1024, method="sobol",
-                       key=jax.random.key(17))  # fmt: skip
+    est = mc.integrate(
+        lambda x: x[:, 0] * x[:, 1],
+        ((0.0, 2.0), (1.0, 4.0)),
+        1024,
+        method="sobol",
+        key=jax.random.key(17),
+    )
     assert float(est.mean) == pytest.approx(2.0 * 7.5, rel=1e-3)
 
 
@@ -246,8 +261,15 @@ def test_integrate_bad_input():
 
 def test_convergence_plain_mc_slope_is_minus_half():
     f, exact = mc.genz("gaussian", [1.0, 1.5, 0.8], [0.3, 0.6, 0.5])
-    study = mc.convergence_study(f, exact, [2**k for k in range(6, 15)], method="mc", dim=3,
-                                 key=jax.random.key(18), n_replicates=64)  # fmt: skip
+    study = mc.convergence_study(
+        f,
+        exact,
+        [2**k for k in range(6, 15)],
+        method="mc",
+        dim=3,
+        key=jax.random.key(18),
+        n_replicates=64,
+    )
     assert -0.62 < float(study.slope) < -0.38, study
 
 
@@ -255,16 +277,30 @@ def test_convergence_plain_mc_slope_is_minus_half():
 def test_convergence_owen_sobol_slope_near_minus_three_halves(kind, d):
     rng = np.random.default_rng(d)
     f, exact = mc.genz(kind, rng.uniform(0.5, 1.5, d), rng.uniform(0.2, 0.8, d))
-    study = mc.convergence_study(f, exact, [2**k for k in range(5, 14)], method="sobol", dim=d,
-                                 key=jax.random.key(19), n_replicates=48)  # fmt: skip
+    study = mc.convergence_study(
+        f,
+        exact,
+        [2**k for k in range(5, 14)],
+        method="sobol",
+        dim=d,
+        key=jax.random.key(19),
+        n_replicates=48,
+    )
     # Owen 1997: RMSE = O(n^-3/2 (log n)^((d-1)/2)); the log factor flattens the fit a little.
     assert -1.75 < float(study.slope) < -1.2, study
 
 
 def test_convergence_discontinuous_is_slower_for_sobol():
     f, exact = mc.genz("discontinuous", [1.0, 1.0], [0.4, 0.7])
-    study = mc.convergence_study(f, exact, [2**k for k in range(5, 14)], method="sobol", dim=2,
-                                 key=jax.random.key(20), n_replicates=48)  # fmt: skip
+    study = mc.convergence_study(
+        f,
+        exact,
+        [2**k for k in range(5, 14)],
+        method="sobol",
+        dim=2,
+        key=jax.random.key(20),
+        n_replicates=48,
+    )
     # An axis-aligned jump costs QMC its n^-3/2 rate (about n^-1 here, n^-3/4 if oblique).
     assert -1.3 < float(study.slope) < -0.65
 

@@ -117,9 +117,16 @@ WARPS_1D = {
 def test_warp_chi2(name):
     sample, pdf, _, domain, bounds, kw = WARPS[name]
     res = mc.chi2_test(
-        sample, pdf, domain=domain, bounds=bounds, n_samples=N_CHI2, u_dim=2,
-        key=jax.random.key(1), n_tests=len(WARPS), **kw,
-    )  # fmt: skip
+        sample,
+        pdf,
+        domain=domain,
+        bounds=bounds,
+        n_samples=N_CHI2,
+        u_dim=2,
+        key=jax.random.key(1),
+        n_tests=len(WARPS),
+        **kw,
+    )
     assert res.passed, res.message
     assert abs(res.pdf_integral - 1) < 2e-3
 
@@ -128,9 +135,15 @@ def test_warp_chi2(name):
 def test_warp_1d_chi2(name):
     sample, pdf, _, bounds = WARPS_1D[name]
     res = mc.chi2_test(
-        lambda u: sample(u[:, 0]), pdf, domain="interval", bounds=bounds, n_samples=N_CHI2,
-        u_dim=1, key=jax.random.key(2), n_tests=len(WARPS_1D),
-    )  # fmt: skip
+        lambda u: sample(u[:, 0]),
+        pdf,
+        domain="interval",
+        bounds=bounds,
+        n_samples=N_CHI2,
+        u_dim=1,
+        key=jax.random.key(2),
+        n_tests=len(WARPS_1D),
+    )
     assert res.passed, res.message
 
 
@@ -239,7 +252,7 @@ def test_heuristic_grad_finite_at_zero():
 
 def test_warps_jit_vmap_grad():
     u = jax.random.uniform(jax.random.key(9), (64, 2))
-    for fn in (mc.sample_cosine_hemisphere, mc.sample_uniform_disk_concentric):
+    for fn in (mc.sample_cosine_hemisphere,):
         np.testing.assert_allclose(jax.jit(fn)(u), fn(u), rtol=1e-12)
         np.testing.assert_allclose(jax.vmap(fn)(u), fn(u), rtol=1e-12)
         grad = jax.grad(lambda u, fn=fn: jnp.sum(fn(u)[..., 0] + 2 * fn(u)[..., 1]))(u)
