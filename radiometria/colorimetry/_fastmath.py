@@ -14,7 +14,7 @@ from jax import lax
 
 # fdlibm s_cbrt.c / s_cbrtf.c: B1 = (bias - bias/3 - 0.03306235651) * 2**mantissa_bits,
 # so that bits(x)/3 + B1 is a 5-bit approximation of cbrt(x) for x > 0.
-_CBRT_B1_F64 = 715094163 * 2**32
+_CBRT_B1_F64_HI = 715094163  # on the high word
 _CBRT_B1_F32 = 709958130
 
 
@@ -34,8 +34,11 @@ def cbrt_positive(t):
 
 def _cbrt_core(t):
     if t.dtype == jnp.float64:
+        # As fdlibm, on the high 32-bit word only (int64 division does not vectorise).
         i = lax.bitcast_convert_type(t, jnp.int64)
-        y = lax.bitcast_convert_type(i // 3 + _CBRT_B1_F64, jnp.float64)
+        hi = lax.shift_right_logical(i, jnp.int64(32)).astype(jnp.int32)
+        hi = (hi // 3 + _CBRT_B1_F64_HI).astype(jnp.int64)
+        y = lax.bitcast_convert_type(lax.shift_left(hi, jnp.int64(32)), jnp.float64)
         steps = 3  # 5 -> 15 -> 45 -> >53 bits
     else:
         i = lax.bitcast_convert_type(t.astype(jnp.float32), jnp.int32)
@@ -54,14 +57,31 @@ def _cbrt_positive_jvp(primals, tangents):
     return y, dt / (3.0 * y * y)
 
 
+# Taylor coefficients of arctan(u)/u in u^2, highest first: (-1)^k / (2k+1), k = 0..22.
+_ATAN_COEFFS = [(-1.0) ** k / (2 * k + 1) for k in range(22, -1, -1)]
+_TAN_PI_8 = math.tan(math.pi / 8.0)
+
+
+def _atan_unit(t):
+    """arctan(t) for 0 <= t <= 1: arctan(t) = pi/4 + arctan((t-1)/(t+1)) above tan(pi/8), then
+    the Taylor series on |u| <= tan(pi/8) to u^45 (truncation error < 1e-19)."""
+    hi = t > _TAN_PI_8
+    u = jnp.where(hi, (t - 1.0) / (t + 1.0), t)
+    u2 = u * u
+    p = jnp.zeros_like(u) + _ATAN_COEFFS[0]
+    for c in _ATAN_COEFFS[1:]:
+        p = p * u2 + c
+    return jnp.where(hi, 0.25 * math.pi, 0.0) + u * p
+
+
 def atan2_degrees(y, x):
-    """atan2(y, x) in degrees in [0, 360), from the vectorised `arctan`; (0, 0) gives 0."""
+    """atan2(y, x) in degrees in [0, 360), by polynomial (vectorises); (0, 0) gives 0."""
     ax, ay = jnp.abs(x), jnp.abs(y)
     steep = ay > ax
     num = jnp.where(steep, ax, ay)
     den = jnp.where(steep, ay, ax)
     zero = den == 0
-    a = jnp.arctan(jnp.where(zero, 0.0, num / jnp.where(zero, 1.0, den)))  # [0, pi/4]
+    a = _atan_unit(jnp.where(zero, 0.0, num / jnp.where(zero, 1.0, den)))  # [0, pi/4]
     a = jnp.where(steep, 0.5 * math.pi - a, a)
     a = jnp.where(x < 0, math.pi - a, a)
     a = jnp.degrees(a)

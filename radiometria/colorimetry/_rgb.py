@@ -212,46 +212,74 @@ _D65 = (0.3127, 0.3290)
 _D50 = (0.3457, 0.3585)
 _ACES_WHITE = (0.32168, 0.33767)
 
-RGB_COLOURSPACES: dict[str, RGBColourspace] = {
-    # IEC 61966-2-1 / ITU-R BT.709 primaries (thesis table 2.2).
-    "sRGB": RGBColourspace("sRGB", [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]], _D65, "D65", "sRGB"),
-    # Apple Display P3: DCI-P3 primaries, D65, sRGB transfer function.
-    "Display P3": RGBColourspace(
-        "Display P3", [[0.680, 0.320], [0.265, 0.690], [0.150, 0.060]], _D65, "D65", "sRGB"
-    ),
-    # ITU-R BT.2020-2.
-    "ITU-R BT.2020": RGBColourspace(
-        "ITU-R BT.2020", [[0.708, 0.292], [0.170, 0.797], [0.131, 0.046]], _D65, "D65", "BT.709"
-    ),
-    # SMPTE ST 2065-1 (AP0).
-    "ACES2065-1": RGBColourspace(
-        "ACES2065-1",
-        [[0.73470, 0.26530], [0.00000, 1.00000], [0.00010, -0.07700]],
-        _ACES_WHITE,
-        "ACES",
-        "linear",
-    ),
-    # Academy S-2014-004 (AP1).
-    "ACEScg": RGBColourspace(
-        "ACEScg", [[0.713, 0.293], [0.165, 0.830], [0.128, 0.044]], _ACES_WHITE, "ACES", "linear"
-    ),
-    # ANSI/I3A IT10.7666 / ISO 22028-2 (ROMM RGB).
-    "ProPhoto RGB": RGBColourspace(
-        "ProPhoto RGB",
-        [[0.7347, 0.2653], [0.1596, 0.8404], [0.0366, 0.0001]],
-        _D50,
-        "D50",
-        "ROMM",
-    ),
-    # Adobe RGB (1998) specification.
-    "Adobe RGB (1998)": RGBColourspace(
-        "Adobe RGB (1998)",
-        [[0.64, 0.33], [0.21, 0.71], [0.15, 0.06]],
-        _D65,
-        "D65",
-        "Adobe RGB (1998)",
-    ),
-}
+
+class _ColourspaceDict(dict):
+    """A dict of the canonical spaces whose lookups also accept the aliases
+    (`RGB_COLOURSPACES["Rec.2020"]`); iteration lists canonical names only."""
+
+    def __missing__(self, key):
+        if key in COLOURSPACE_ALIASES:
+            return self[COLOURSPACE_ALIASES[key]]
+        raise KeyError(
+            f"Unknown colourspace {key!r}; valid values are: {', '.join(map(repr, self))} "
+            f"(aliases: {', '.join(map(repr, COLOURSPACE_ALIASES))})."
+        )
+
+    def __contains__(self, key):
+        return dict.__contains__(self, key) or key in COLOURSPACE_ALIASES
+
+    def get(self, key, default=None):
+        return self[key] if key in self else default
+
+
+RGB_COLOURSPACES: dict[str, RGBColourspace] = _ColourspaceDict(
+    {
+        # IEC 61966-2-1 / ITU-R BT.709 primaries (thesis table 2.2).
+        "sRGB": RGBColourspace(
+            "sRGB", [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]], _D65, "D65", "sRGB"
+        ),
+        # Apple Display P3: DCI-P3 primaries, D65, sRGB transfer function.
+        "Display P3": RGBColourspace(
+            "Display P3", [[0.680, 0.320], [0.265, 0.690], [0.150, 0.060]], _D65, "D65", "sRGB"
+        ),
+        # ITU-R BT.2020-2.
+        "ITU-R BT.2020": RGBColourspace(
+            "ITU-R BT.2020", [[0.708, 0.292], [0.170, 0.797], [0.131, 0.046]], _D65, "D65", "BT.709"
+        ),
+        # SMPTE ST 2065-1 (AP0).
+        "ACES2065-1": RGBColourspace(
+            "ACES2065-1",
+            [[0.73470, 0.26530], [0.00000, 1.00000], [0.00010, -0.07700]],
+            _ACES_WHITE,
+            "ACES",
+            "linear",
+        ),
+        # Academy S-2014-004 (AP1).
+        "ACEScg": RGBColourspace(
+            "ACEScg",
+            [[0.713, 0.293], [0.165, 0.830], [0.128, 0.044]],
+            _ACES_WHITE,
+            "ACES",
+            "linear",
+        ),
+        # ANSI/I3A IT10.7666 / ISO 22028-2 (ROMM RGB).
+        "ProPhoto RGB": RGBColourspace(
+            "ProPhoto RGB",
+            [[0.7347, 0.2653], [0.1596, 0.8404], [0.0366, 0.0001]],
+            _D50,
+            "D50",
+            "ROMM",
+        ),
+        # Adobe RGB (1998) specification.
+        "Adobe RGB (1998)": RGBColourspace(
+            "Adobe RGB (1998)",
+            [[0.64, 0.33], [0.21, 0.71], [0.15, 0.06]],
+            _D65,
+            "D65",
+            "Adobe RGB (1998)",
+        ),
+    }
+)
 
 COLOURSPACE_ALIASES: dict[str, str] = {
     "Rec.2020": "ITU-R BT.2020",

@@ -580,6 +580,7 @@ def _domain_map(domain, d_box: int | None):
     return box.shape[0], lambda u: lo[None, :] + u * (hi - lo)[None, :], jnp.prod(hi - lo)
 
 
+@eqx.filter_jit
 def integrate(
     f: Callable,
     domain,

@@ -189,11 +189,25 @@ def _halton_permuted(key: Key, n: int, d: int, skip: int, dtype) -> Array:
     q = hi0 + jnp.arange(h_max, dtype=jnp.uint32)[None, :]
     scale0 = jnp.power(bf, -(k_lo_j.astype(dtype) + 1.0))
     t_hi = add_digits(q, jnp.zeros((d, h_max), dtype), scale0, k_lo_j, k_total, nd_j)
-    cols = []
-    for j, (_, block, _, n_hi, off) in enumerate(split):
-        col = (t_hi[j, :n_hi][:, None] + t_lo[j, :block][None, :]).reshape(-1)
-        cols.append(col[off : off + n])
-    x = jnp.stack(cols, axis=1)
+    # phi(i) = T_lo[j, i mod B_j] + T_hi[j, i div B_j - hi0_j], by two gathers from the flat
+    # tables. The division uses a float32 reciprocal and one integer correction, exact for
+    # i < 2^24, so no integer division is done per point.
+    blocks = np.array([sp[1] for sp in split], dtype=np.int64)
+    i = jnp.asarray(skip, jnp.int32) + jnp.arange(n, dtype=jnp.int32)[:, None]  # (n, 1)
+    b_row = jnp.asarray(blocks.astype(np.int32))[None, :]
+    if skip + n <= 2**24:
+        inv_b = jnp.asarray((1.0 / blocks).astype(np.float32))[None, :]
+        q = jnp.floor((i.astype(jnp.float32) + 0.5) * inv_b).astype(jnp.int32)
+        r = i - q * b_row
+        q = jnp.where(r < 0, q - 1, jnp.where(r >= b_row, q + 1, q))
+    else:
+        q = i // b_row
+    r = i - q * b_row
+    lo_idx = jnp.arange(d, dtype=jnp.int32)[None, :] * b_max_block + r
+    hi_idx = jnp.arange(d, dtype=jnp.int32)[None, :] * h_max + (
+        q - hi0[:, 0][None, :].astype(jnp.int32)
+    )
+    x = t_lo.reshape(-1)[lo_idx] + t_hi.reshape(-1)[hi_idx]
     return jnp.minimum(x, 1.0 - jnp.finfo(dtype).epsneg)
 
 
@@ -261,8 +275,8 @@ def halton(
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")
     skip = check_positive_int(skip, "skip", minimum=0)
-    if skip + n > 2**32:
-        raise ValueError(f"`skip + n` = {skip + n} exceeds 2^32 points.")
+    if skip + n > 2**31:
+        raise ValueError(f"`skip + n` = {skip + n} exceeds 2^31 points.")
     if scramble is not None:
         check_choice(scramble, "scramble", [s for s in SCRAMBLES if s is not None])
     scramble = None if scramble == "none" else scramble

@@ -315,11 +315,15 @@ def build_bvh(
         boxes[rows, cols_lo + 3] = c_hi.ravel()
         q_start, q_count, q_parent, q_side = c_start, c_count, c_parent, c_side
         depth += 1
+    tri = corners[order].reshape(n_tri, 9)
+    prim = order.astype(np.int32)
+    if n_tri == 0:  # one degenerate stand-in keeps the gathers valid; no leaf points at it
+        tri, prim = np.zeros((1, 9), dt), np.zeros(1, np.int32)
     return BVH(
         node_boxes=jnp.asarray(boxes[:n_nodes]),
         node_children=jnp.asarray(children[:n_nodes]),
-        triangles=jnp.asarray(corners[order].reshape(n_tri, 9)),
-        prim_ids=jnp.asarray(order.astype(np.int32)),
+        triangles=jnp.asarray(tri),
+        prim_ids=jnp.asarray(prim),
         bounds=jnp.asarray(np.stack([scene_lo, scene_hi]).astype(dt)),
         stack_size=int(depth),
         max_leaf_size=int(max_leaf_size),

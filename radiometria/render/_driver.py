@@ -46,7 +46,7 @@ from .._checks import check_choice, check_positive_int
 from ..camera import Film, film_develop, film_samples_to_XYZ
 from ._integrators import DIMENSIONS_PER_BOUNCE, path_radiance
 from ._render_scene import RenderScene
-from ._samplers import SAMPLERS, pixel_samples
+from ._samplers import SAMPLERS, sample_block
 from ._spectral import sample_hero_wavelengths
 
 __all__ = ["INTEGRATORS", "RECONSTRUCTIONS", "estimate_render_memory", "render"]
@@ -129,10 +129,6 @@ class _Config:
     reconstruction: str
     devices: tuple
 
-    @property
-    def n_dims(self) -> int:
-        return CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * (self.max_depth - 1)
-
 
 def _trace(kernel: _Kernel, key, pass_start, pixel, *, cfg: _Config):
     """Trace the step's paths of (a device's share of) a tile of pixels.
@@ -142,13 +138,18 @@ def _trace(kernel: _Kernel, key, pass_start, pixel, *, cfg: _Config):
     """
     dtype = jnp.float32
     t, k = pixel.shape[0], cfg.plan.passes
-    passes = pass_start + jnp.arange(k, dtype=jnp.int32)
     valid_pixel = pixel < cfg.plan.n_pixels
-    pix = jnp.where(valid_pixel, pixel, 0)
-    u = pixel_samples(key, cfg.sampler, passes, pix, cfg.n_dims, spp=cfg.spp, dtype=dtype)
-    u = u.reshape(t * k, cfg.n_dims)
+    pix = jnp.repeat(jnp.where(valid_pixel, pixel, 0), k)  # (n,): pixel-major
+    passes = jnp.tile(pass_start + jnp.arange(k, dtype=jnp.int32), t)
+    sample = functools.partial(sample_block, key, cfg.sampler, spp=cfg.spp, dtype=dtype)
+    u = sample(pix, passes, 0, CAMERA_DIMENSIONS)
+
+    def bounce_samples(b, paths):
+        paths = jnp.minimum(paths, t * k - 1)
+        first = CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * b
+        return sample(pix[paths], passes[paths], first, DIMENSIONS_PER_BOUNCE)
+
     corner = jnp.stack([pix % cfg.width, pix // cfg.width], axis=-1).astype(dtype)
-    corner = jnp.repeat(corner, k, axis=0)
     if cfg.reconstruction == "importance":
         # Filter importance sampling (thesis eq. 2.35): offset ~ |f|, weight f / p.
         offset, weight = kernel.rfilter.sample(u[:, 0:2])
@@ -164,12 +165,12 @@ def _trace(kernel: _Kernel, key, pass_start, pixel, *, cfg: _Config):
         origins.astype(dtype),
         directions.astype(dtype),
         wavelength_nm.astype(dtype),
-        u[:, CAMERA_DIMENSIONS:],
+        bounce_samples,
         max_depth=cfg.max_depth,
         rr_depth=cfg.rr_depth,
     )
     xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
-    ok = jnp.repeat(valid_pixel, k) & (jnp.tile(passes, t) < cfg.spp)
+    ok = jnp.repeat(valid_pixel, k) & (passes < cfg.spp)
     ok = ok & jnp.all(jnp.isfinite(xyz), axis=-1)
     return raster, jnp.where(ok[:, None], xyz, 0.0), jnp.where(ok, weight.astype(dtype), 0.0)
 
@@ -189,7 +190,7 @@ def render(
     devices=None,
     camera=None,
     rfilter=None,
-    rr_depth: int = 5,
+    rr_depth: int | None = None,
     reconstruction: str = "splat",
     return_xyz: bool = False,
 ):
@@ -213,7 +214,8 @@ def render(
     - `devices`: the devices to shard the pixels over; default `jax.local_devices()`.
     - `camera`, `rfilter`: a `radiometria.camera.PinholeCamera` and reconstruction filter, for
         a `RenderScene` (default filter: Gaussian, stddev 0.5 px, radius 2 px).
-    - `rr_depth`: path segments before Russian roulette starts (Mitsuba's `rr_depth`, 5).
+    - `rr_depth`: path segments before Russian roulette starts (Mitsuba's `rr_depth`);
+        default: the scene's, else 5.
     - `reconstruction`: how samples become pixels (thesis 2.3.2): `"splat"` (default; samples
         uniform in their pixel, each added to every pixel within the filter radius with weight
         $f$, eq. 2.34, as Mitsuba's `hdrfilm`) or `"importance"` (filter importance sampling:
@@ -243,14 +245,18 @@ def render(
     spp = check_positive_int(spp, "spp")
     if max_depth is not None:
         max_depth = check_positive_int(max_depth, "max_depth")
-    rr_depth = check_positive_int(rr_depth, "rr_depth")
+    if rr_depth is not None:
+        rr_depth = check_positive_int(rr_depth, "rr_depth")
     check_choice(integrator, "integrator", INTEGRATORS)
     check_choice(sampler, "sampler", SAMPLERS)
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"`seed` must be an int, got {type(seed).__name__} {seed!r}.")
-    scene, camera, rfilter, scene_depth = _resolve_scene(scene, camera, rfilter, width, height)
+    scene, camera, rfilter, scene_depth, scene_rr = _resolve_scene(
+        scene, camera, rfilter, width, height
+    )
     max_depth = scene_depth if max_depth is None else max_depth
+    rr_depth = rr_depth if rr_depth is not None else scene_rr if scene_rr is not None else 5
     if integrator == "direct":  # the path estimator with two segments and no roulette
         max_depth, rr_depth = min(max_depth, 2), 2
     width, height = int(camera.width), int(camera.height)
@@ -304,9 +310,19 @@ def render(
 
 
 def _resolve_scene(scene, camera, rfilter, width, height):
-    """(RenderScene, camera, filter, default max_depth) from what `render` was given."""
+    """(RenderScene, camera, filter, default max_depth, rr_depth) from what `render` got."""
     from ..camera import GaussianFilter
+    from ._render_scene import DEFAULT_UNBOUNDED_DEPTH, compile_scene
+    from ._scene import SceneDescription, load_scene
 
+    if isinstance(scene, str | os.PathLike):
+        scene = load_scene(scene)
+    if isinstance(scene, SceneDescription):
+        if camera is not None:
+            raise ValueError("`camera` is for a RenderScene; a loaded scene has its own camera.")
+        rs, cam, filt = compile_scene(scene, width=width, height=height)
+        depth = DEFAULT_UNBOUNDED_DEPTH if scene.max_depth is None else scene.max_depth
+        return rs, cam, filt if rfilter is None else rfilter, depth, scene.rr_depth
     if isinstance(scene, RenderScene):
         if camera is None:
             raise ValueError("Rendering a `RenderScene` needs `camera` (a PinholeCamera).")
@@ -319,7 +335,7 @@ def _resolve_scene(scene, camera, rfilter, width, height):
                     f"`{name}`={value} differs from the camera's {have} [px]; build the camera "
                     "with the image size you want."
                 )
-        return scene, camera, GaussianFilter() if rfilter is None else rfilter, 8
+        return scene, camera, GaussianFilter() if rfilter is None else rfilter, 8, None
     raise TypeError(
         f"`scene` must be a scene name, a path, a loaded scene or a RenderScene, got "
         f"{type(scene).__name__}."

@@ -92,15 +92,22 @@ def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
 
 
 def _emitted(scene: RenderScene, v: _Vertex, wavelength_nm):
-    """Radiance emitted towards the ray origin at `v` (area lights emit on their front side)."""
+    """Radiance emitted towards the ray origin at `v` (on the front side unless two-sided)."""
     emitter = scene.face_emitter[v.face]
-    on = v.valid & (emitter >= 0) & (v.cos_o > 0)
+    two_sided = scene.emitter_two_sided[jnp.maximum(emitter, 0)]
+    on = v.valid & (emitter >= 0) & ((v.cos_o > 0) | (two_sided & (v.cos_o != 0)))
     le = scene.radiance(jnp.maximum(emitter, 0), wavelength_nm)
     return jnp.where(on[:, None], le, 0.0)
 
 
 def _light_pdf_solid_angle(scene: RenderScene, face, dist, cos_light):
-    """Density of next-event estimation for a point on `face`, per unit solid angle [sr^-1]."""
+    """Density of next-event estimation for a point on `face`, per unit solid angle [sr^-1].
+
+    `cos_light` is the cosine between the face normal and the direction towards the shading
+    point; it must be > 0 (front side), or != 0 for a two-sided emitter.
+    """
+    two_sided = scene.emitter_two_sided[jnp.maximum(scene.face_emitter[face], 0)]
+    cos_light = jnp.where(two_sided, jnp.abs(cos_light), cos_light)
     pdf_area = scene.light_pdf_area[face]
     ok = (cos_light > 0) & (pdf_area > 0)
     return jnp.where(ok, pdf_area * dist * dist / jnp.where(ok, cos_light, 1.0), 0.0)
@@ -124,7 +131,10 @@ def path_radiance(
     - `scene`: the compiled scene (`RenderScene`).
     - `origins`, `directions`: camera rays, `(n, 3)`; directions unit length. [scene units]
     - `wavelength_nm`: the wavelengths of each path, `(n, k)` (k = 4 hero wavelengths). [nm]
-    - `u`: uniform variates in [0, 1), `(n, sample_dimensions(max_depth))`. [1]
+    - `u`: uniform variates in [0, 1): an array `(n, sample_dimensions(max_depth))`, whose
+        columns `8 b .. 8 b + 7` serve bounce `b`; or a function `u(b, paths)` returning those
+        eight variates `(m, 8)` for the paths with indices `paths` (int32 `(m,)`; indices
+        `>= n` are padding), so that a sampler can generate them for live paths only. [1]
     - `max_depth`: largest number of path segments (Mitsuba's meaning), a static int >= 1.
     - `rr_depth`: number of segments after which Russian roulette starts (static int >= 1);
         a value >= `max_depth` turns roulette off.
@@ -150,24 +160,31 @@ def path_radiance(
     if isinstance(rr_depth, bool) or not isinstance(rr_depth, int) or rr_depth < 1:
         raise ValueError(f"`rr_depth` must be an int >= 1, got {rr_depth!r}.")
     n_rays = origins.shape[0]
-    dims = sample_dimensions(max_depth)
-    if u.shape != (n_rays, dims):
-        raise ValueError(
-            f"`u` must have shape (rays, {dims}) = {(n_rays, dims)} for max_depth={max_depth}, "
-            f"got {u.shape}."
-        )
+    if callable(u):
+        sample = u
+    else:
+        dims = sample_dimensions(max_depth)
+        if u.shape != (n_rays, dims):
+            raise ValueError(
+                f"`u` must have shape (rays, {dims}) = {(n_rays, dims)} for "
+                f"max_depth={max_depth}, got {u.shape}."
+            )
+
+        def sample(b, paths):
+            cols = jax.lax.dynamic_slice_in_dim(
+                u, b * DIMENSIONS_PER_BOUNCE, DIMENSIONS_PER_BOUNCE, 1
+            )
+            return jnp.take(cols, paths, axis=0, mode="clip")
+
     v = _vertex(scene, origins, directions)
     radiance = _emitted(scene, v, wavelength_nm)
     if max_depth == 1:
         return radiance
     state = _PathState(v, directions, jnp.ones_like(radiance), radiance, v.valid)
-    n_bounces = max_depth - 1
-    u_b = jnp.moveaxis(u.reshape(n_rays, n_bounces, DIMENSIONS_PER_BOUNCE), 1, 0)
     chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)
     n_pad = -(-n_rays // chunk) * chunk
 
-    def one_bounce(state: _PathState, xs):
-        b, u_bounce = xs
+    def one_bounce(state: _PathState, b):
         # Roulette acts once `rr_depth` segments exist, i.e. from bounce index rr_depth - 1 on.
         roulette = b >= rr_depth - 1
         # Stream compaction: only live paths are traced, in chunks of static size, so the
@@ -179,14 +196,14 @@ def path_radiance(
             sel = jax.lax.dynamic_slice_in_dim(live, i * chunk, chunk)
             take = functools.partial(jnp.take, indices=sel, axis=0, mode="clip")
             new = _bounce(
-                scene, jax.tree.map(take, state), take(wavelength_nm), take(u_bounce), roulette
+                scene, jax.tree.map(take, state), take(wavelength_nm), sample(b, sel), roulette
             )
             return jax.tree.map(lambda a, x: a.at[sel].set(x, mode="drop"), state, new)
 
         return jax.lax.fori_loop(0, n_chunks, one_chunk, state), None
 
-    bounces = jnp.arange(n_bounces, dtype=jnp.int32)
-    state, _ = jax.lax.scan(one_bounce, state, (bounces, u_b))
+    bounces = jnp.arange(max_depth - 1, dtype=jnp.int32)
+    state, _ = jax.lax.scan(one_bounce, state, bounces)
     return state.radiance
 
 

@@ -296,6 +296,8 @@ def _properties(ctx: _Ctx, node: _Node, allowed: set[str]) -> dict:
     for ch in node.children:
         if ch.tag not in _VALUE_TAGS:
             continue
+        if ch.tag == "texture":
+            raise ctx.err(ch, f"textures are not supported (line {ch.line})")
         name = ctx.attr(ch, "name")
         if name not in allowed:
             raise ctx.err(ch, f"unsupported parameter '{name}' of <{node.tag} type="

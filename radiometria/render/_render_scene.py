@@ -25,7 +25,7 @@ from ._intersect import (
 from ._mesh import TriangleMesh
 from ._spectral import SpectrumTable
 
-__all__ = ["BRUTE_FORCE_MAX_TRIANGLES", "RenderScene"]
+__all__ = ["BRUTE_FORCE_MAX_TRIANGLES", "DEFAULT_UNBOUNDED_DEPTH", "RenderScene", "compile_scene"]
 
 BRUTE_FORCE_MAX_TRIANGLES = 64
 
@@ -46,6 +46,7 @@ class RenderScene(eqx.Module):
     reflectance: SpectrumTable  # one row per material [1]
     two_sided: Bool[Array, " m"]  # per material: scatter on both sides
     radiance: SpectrumTable  # one row per emitter [W m^-2 sr^-1 nm^-1]
+    emitter_two_sided: Bool[Array, " e"]  # per emitter: emits on both sides
     light_face: Int[Array, " l"]  # emissive triangles
     light_cdf: Float[Array, " l"]  # cumulative selection probabilities (last = 1)
     light_pdf_area: Float[Array, " f"]  # NEE density per unit area on each triangle [1/area]
@@ -63,6 +64,7 @@ class RenderScene(eqx.Module):
         radiance: SpectrumTable,
         *,
         two_sided=None,
+        emitter_two_sided=None,
         accelerator: str = "auto",
         dtype=jnp.float32,
     ) -> "RenderScene":
@@ -77,6 +79,8 @@ class RenderScene(eqx.Module):
         - `face_emitter`: `(f,)` row of `radiance` for each triangle, or -1.
         - `radiance`: emitted radiance spectra, one row per emitter, emitted on the front side.
         - `two_sided`: `(m,)` booleans, materials that scatter on both sides (default: none).
+        - `emitter_two_sided`: `(e,)` booleans, emitters that emit on both sides (default:
+            none).
         - `accelerator`: `"bvh"`, `"brute_force"` (test every triangle: fastest for a few
             dozen triangles, such as the Cornell box) or `"auto"` (brute force up to
             `BRUTE_FORCE_MAX_TRIANGLES` triangles).
@@ -102,6 +106,11 @@ class RenderScene(eqx.Module):
         two_sided = (
             np.zeros(n_mat, bool) if two_sided is None else np.asarray(two_sided, bool)
         ).reshape(n_mat)
+        emitter_two_sided = (
+            np.zeros(n_em, bool)
+            if emitter_two_sided is None
+            else np.asarray(emitter_two_sided, bool)
+        ).reshape(n_em)
 
         v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
         e1, e2 = v1 - v0, v2 - v0
@@ -154,6 +163,7 @@ class RenderScene(eqx.Module):
             reflectance=SpectrumTable(f(reflectance.values)),
             two_sided=jnp.asarray(two_sided),
             radiance=SpectrumTable(f(radiance.values)),
+            emitter_two_sided=jnp.asarray(emitter_two_sided),
             light_face=i(light_face),
             light_cdf=f(light_cdf),
             light_pdf_area=f(pdf_area),
@@ -176,3 +186,89 @@ class RenderScene(eqx.Module):
     def bsdf(self, material, wavelength_nm) -> DiffuseBxDF:
         """The BSDF of each hit at its wavelengths (Lambertian with the material's reflectance)."""
         return DiffuseBxDF(self.reflectance(material, wavelength_nm))
+
+
+DEFAULT_UNBOUNDED_DEPTH = 64  # max_depth for scenes that leave it unbounded (Mitsuba's -1)
+
+
+def _make_filter(film):
+    from ..camera import BoxFilter, GaussianFilter, LanczosFilter, MitchellFilter, TentFilter
+
+    p = dict(film.filter_params)
+    kind = film.filter
+    if kind == "gaussian":
+        return GaussianFilter(p.get("stddev", 0.5), p.get("radius"))
+    if kind == "box":
+        return BoxFilter(p.get("radius", 0.5))
+    if kind == "tent":
+        return TentFilter(p.get("radius", 1.0))
+    if kind in ("mitchell", "catmullrom"):
+        b, c = (1.0 / 3.0, 1.0 / 3.0) if kind == "mitchell" else (0.0, 0.5)
+        return MitchellFilter(p.get("B", b), p.get("C", c), p.get("radius", 2.0))
+    if kind == "lanczos":
+        lobes = p.get("lobes", p.get("tau", 3.0))
+        return LanczosFilter(lobes, p.get("radius"))
+    raise ValueError(f"Unsupported reconstruction filter {kind!r}.")
+
+
+def compile_scene(description, *, width=None, height=None, accelerator: str = "auto"):
+    """Turn a loaded scene (`load_scene`) into `(RenderScene, PinholeCamera, filter)`.
+
+    Materials and emitters become spectra on the renderer's 1 nm grid (`spectrum_values`):
+    RGB reflectances as bounded sigmoid-polynomial spectra, RGB radiances as illuminant
+    spectra (x D65 with Y = 1), measured and blackbody spectra as given. The camera keeps its
+    field of view along its `fov_axis` when `width`/`height` override the film's size.
+
+    **Arguments:**
+
+    - `description`: a `SceneDescription`.
+    - `width`, `height`: image size [px]; default: the scene's film.
+    - `accelerator`: as in `RenderScene.from_triangles`.
+
+    **Returns:**
+
+    `(scene, camera, rfilter)`.
+    """
+    from ..camera import PinholeCamera
+    from ._spectral import spectrum_values
+
+    for m in description.materials:
+        if m.type != "diffuse":
+            raise ValueError(
+                f"{description.source or 'scene'}: material {m.name!r} has type {m.type!r}; "
+                "the integrators support 'diffuse' materials."
+            )
+    reflectance = np.stack(
+        [
+            spectrum_values(m.params.get("reflectance", {"value": 0.5}), "albedo")
+            for m in description.materials
+        ]
+    )
+    if description.emitters:
+        radiance = np.stack(
+            [spectrum_values(e.radiance, "illuminant") for e in description.emitters]
+        )
+    else:
+        radiance = np.zeros((0, reflectance.shape[1]))
+    scene = RenderScene.from_triangles(
+        description.vertices,
+        description.faces,
+        description.face_material,
+        SpectrumTable(jnp.asarray(reflectance, jnp.float32)),
+        description.face_emitter,
+        SpectrumTable(jnp.asarray(radiance.reshape(-1, reflectance.shape[1]), jnp.float32)),
+        two_sided=[m.two_sided for m in description.materials],
+        emitter_two_sided=[e.two_sided for e in description.emitters],
+        accelerator=accelerator,
+    )
+    cam = description.camera
+    camera = PinholeCamera.from_to_world(
+        np.asarray(cam.to_world, np.float64),
+        float(cam.fov_deg),
+        description.film.width if width is None else width,
+        description.film.height if height is None else height,
+        cam.fov_axis,
+        near_clip=cam.near_clip,
+        far_clip=cam.far_clip,
+    )
+    return scene, camera, _make_filter(description.film)

@@ -23,7 +23,7 @@ import numpy as np
 from ..montecarlo._halton import _mix32, permutation_element
 from ..montecarlo._sobol import direction_numbers, owen_scramble_32, uint32_to_unit_float
 
-__all__ = ["SAMPLERS", "pixel_samples"]
+__all__ = ["SAMPLERS", "sample_block"]
 
 SAMPLERS = ("independent", "sobol")
 
@@ -56,51 +56,52 @@ def _sobol_2d(index):
     return out
 
 
-def pixel_samples(
-    key, sampler: str, pass_index, pixel_index, n_dims: int, *, spp: int = 1, dtype=jnp.float32
+def sample_block(
+    key, sampler: str, pixel, pass_index, first_dim, n_dims: int, *, spp: int = 1, dtype=jnp.float32
 ):
-    """Uniform variates for every (pixel, pass) pair, shape `(pixels, passes, n_dims)`.
+    """Variates `first_dim .. first_dim + n_dims - 1` of sample `pass_index` of pixel `pixel`.
 
     **Arguments:**
 
     - `key`: a `jax.random` key (the render's seed).
     - `sampler`: `"independent"` or `"sobol"` (static).
-    - `pass_index`: `(k,)` int32 sample indices within each pixel.
-    - `pixel_index`: `(t,)` int32 flat pixel indices `y * width + x`.
-    - `n_dims`: variates per sample (static).
-    - `spp`: samples per pixel of the whole render (static; the Sobol index shuffle block).
+    - `pixel`, `pass_index`: int32 arrays of one shape `(...)`: flat pixel indices
+        `y * width + x` and sample indices within the pixel.
+    - `first_dim`: the first dimension, a multiple of 4 (may be traced).
+    - `n_dims`: how many dimensions, a multiple of 4 (static).
+    - `spp`: samples per pixel of the whole render (static; Sobol permutes indices within it).
 
     **Returns:**
 
-    `u` in [0, 1), `(t, k, n_dims)`, of `dtype`.
+    `u` in [0, 1), shape `(..., n_dims)`, of `dtype`.
     """
-    salt = jax.random.key_data(jax.random.fold_in(key, 0x50B01)).reshape(-1)[:2]
-    salt = salt.astype(_U32)
+    if n_dims % 4:
+        raise ValueError(f"`n_dims` must be a multiple of 4, got {n_dims}.")
+    salt = jax.random.key_data(jax.random.fold_in(key, 0x50B01)).reshape(-1)[:2].astype(_U32)
+    p = pixel.astype(_U32)[..., None]
+    s = pass_index.astype(_U32)[..., None]
+    first = jnp.asarray(first_dim).astype(_U32)
     if sampler == "independent":
-        n_blocks = -(-n_dims // 4)
-        shape = (pixel_index.shape[0], pass_index.shape[0], n_blocks)
-        p = jnp.broadcast_to(pixel_index.astype(_U32)[:, None, None], shape)
-        s = jnp.broadcast_to(pass_index.astype(_U32)[None, :, None], shape)
-        b = jnp.broadcast_to(jnp.arange(n_blocks, dtype=_U32)[None, None, :], shape)
-        words = _pcg4d(p, s, b ^ salt[0], _mix32(b + salt[1]))  # (t, k, blocks, 4)
-        u = words.reshape(shape[0], shape[1], 4 * n_blocks)[..., :n_dims]
-        return uint32_to_unit_float(u, dtype)
-    if sampler == "sobol":
-        n_pairs = (n_dims + 1) // 2
-        # One hash per (pixel, pair of dimensions): it permutes the sample index within the
-        # pixel's spp samples and seeds the two Owen scrambles.
-        p = pixel_index.astype(_U32)[:, None, None]
-        m = jnp.arange(n_pairs, dtype=_U32)[None, None, :]
-        h = _mix32(_mix32(_mix32(p ^ salt[0]) ^ m) + salt[1])  # (t, 1, pairs)
-        s = jnp.broadcast_to(
-            pass_index.astype(_U32)[None, :, None], (h.shape[0], pass_index.shape[0], n_pairs)
+        # Block j holds dimensions 4j .. 4j + 3: one pcg4d hash per block.
+        b = first // np.uint32(4) + jnp.arange(n_dims // 4, dtype=_U32).reshape(
+            (1,) * pixel.ndim + (-1,)
         )
-        index = permutation_element(s, np.uint32(spp), h)  # (t, k, pairs)
-        pts = _sobol_2d(index)
+        p, s, b = jnp.broadcast_arrays(p, s, b)
+        words = _pcg4d(p, s, b ^ salt[0], _mix32(b + salt[1]))  # (..., blocks, 4)
+        return uint32_to_unit_float(words.reshape(pixel.shape + (n_dims,)), dtype)
+    if sampler == "sobol":
+        # Pair m holds dimensions 2m, 2m + 1. One hash per (pixel, pair) permutes the sample
+        # index within the pixel's spp samples and seeds the pair's two Owen scrambles.
+        m = first // np.uint32(2) + jnp.arange(n_dims // 2, dtype=_U32).reshape(
+            (1,) * pixel.ndim + (-1,)
+        )
+        h = _mix32(_mix32(_mix32(p ^ salt[0]) ^ m) + salt[1])  # (..., pairs)
+        s = jnp.broadcast_to(s, h.shape)
+        pts = _sobol_2d(permutation_element(s, np.uint32(spp), h))  # (..., pairs, 2)
         ux = owen_scramble_32(pts[..., 0], _mix32(h ^ np.uint32(0x68E31DA4)))
         uy = owen_scramble_32(pts[..., 1], _mix32(h ^ np.uint32(0xB5297A4D)))
-        u = jnp.stack([ux, uy], axis=-1).reshape(pixel_index.shape[0], pass_index.shape[0], -1)
-        return uint32_to_unit_float(u[..., :n_dims], dtype)
+        u = jnp.stack([ux, uy], axis=-1).reshape(pixel.shape + (n_dims,))
+        return uint32_to_unit_float(u, dtype)
     raise ValueError(
         f"Unknown sampler {sampler!r}; valid values are: {', '.join(map(repr, SAMPLERS))}."
     )

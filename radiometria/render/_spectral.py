@@ -102,6 +102,8 @@ def sample_hero_wavelengths(u: Float[Array, "*batch"]) -> tuple[Array, Array]:
 
 # --- Spectra of scene parameters, tabulated on the renderer's grid ----------------------------
 
+SPECTRUM_KINDS = ("albedo", "illuminant", "unbounded")
+
 
 def _sigmoid_polynomial(coeffs, wavelength_nm):
     x = coeffs[0] * wavelength_nm**2 + coeffs[1] * wavelength_nm + coeffs[2]
@@ -117,10 +119,7 @@ def _rgb_coefficients(rgb) -> np.ndarray:
     return np.asarray(find_coefficients_Jakob2019(xyz)[0])
 
 
-def rgb_albedo_values(rgb) -> np.ndarray:
-    """A linear-sRGB reflectance in [0, 1]^3 upsampled to a bounded spectrum on the grid."""
-    rgb = np.asarray(rgb, np.float64)
-    grid = wavelength_grid_nm()
+def _rgb_albedo(rgb: np.ndarray, grid: np.ndarray) -> np.ndarray:
     if np.all(rgb == rgb[0]):
         return np.full(grid.shape, rgb[0])
     return _sigmoid_polynomial(_rgb_coefficients(rgb), grid)
@@ -136,12 +135,67 @@ def _d65_unit_luminance(grid) -> np.ndarray:
     return s / (np.trapezoid(s * ybar, grid) / np.trapezoid(ybar, grid))
 
 
-def rgb_illuminant_values(rgb) -> np.ndarray:
-    """A linear-sRGB emitted radiance upsampled as PBRT's / Mitsuba's illuminant spectrum."""
-    rgb = np.asarray(rgb, np.float64)
-    grid = wavelength_grid_nm()
-    m = float(rgb.max())
-    scale = 2.0 * m
-    if m <= 0:
+def _rgb_spectrum(rgb: np.ndarray, kind: str, grid: np.ndarray) -> np.ndarray:
+    if np.any(rgb < 0) or not np.all(np.isfinite(rgb)):
+        raise ValueError(f"RGB values must be finite and >= 0, got {rgb.tolist()}.")
+    if kind == "albedo":
+        if np.any(rgb > 1):
+            raise ValueError(f"An RGB reflectance must lie in [0, 1], got {rgb.tolist()}.")
+        return _rgb_albedo(rgb, grid)
+    # PBRT's RGBUnboundedSpectrum / RGBIlluminantSpectrum: scale = 2 max(rgb), the bounded
+    # spectrum of rgb / scale, times the scale (and, for light, the D65 SPD with Y = 1).
+    scale = 2.0 * float(rgb.max())
+    if scale == 0.0:
         return np.zeros(grid.shape)
-    return scale * rgb_albedo_values(rgb / scale) * _d65_unit_luminance(grid)
+    values = scale * _rgb_albedo(rgb / scale, grid)
+    return values * _d65_unit_luminance(grid) if kind == "illuminant" else values
+
+
+def spectrum_values(spec: dict, kind: str) -> np.ndarray:
+    r"""A scene's spectral parameter tabulated on the renderer's grid (`wavelength_grid_nm`).
+
+    **Arguments:**
+
+    - `spec`: one of the forms of `radiometria.render.load_scene`'s scene descriptions:
+        `{"rgb": (3,)}` (linear sRGB), `{"spectrum": (wavelengths_nm, values)}` (linear in
+        between, zero outside, as the measured Cornell data), `{"blackbody": {"temperature":
+        T, "scale": s}}` ($s$ times Planck's law, thesis eq. 1.24) or `{"value": x}`.
+    - `kind`: how an RGB triple becomes a spectrum: `"albedo"` (a reflectance in [0, 1]:
+        the bounded sigmoid-polynomial spectrum of Jakob & Hanika 2019), `"illuminant"` (an
+        emitted radiance: PBRT's `RGBIlluminantSpectrum` and Mitsuba's spectral `rgb` emitter,
+        i.e. $s\,S_{\mathrm{rgb}/s}(\lambda)\,D_{65}(\lambda)$ with $s = 2\max(\mathrm{rgb})$
+        and the D65 SPD scaled to luminance $Y = 1$, so that white (1, 1, 1) emits D65 and
+        renders as linear sRGB (1, 1, 1)) or `"unbounded"` (the same without D65).
+
+    **Returns:**
+
+    Float64 values `(471,)` on the 1 nm grid [the unit of the parameter].
+
+    ??? cite "References"
+        `Jakob2019` (sigmoid-polynomial upsampling); `Pharr2023` §4.6.6 (RGB spectra);
+        `Jakob2022` (Mitsuba's `d65` spectrum for RGB emitters).
+    """
+    from .._checks import check_choice
+
+    check_choice(kind, "kind", SPECTRUM_KINDS)
+    grid = wavelength_grid_nm()
+    if not isinstance(spec, dict) or len(spec) != 1:
+        raise ValueError(f"A spectral parameter must be a dict with one key, got {spec!r}.")
+    ((form, value),) = spec.items()
+    if form == "rgb":
+        return _rgb_spectrum(np.asarray(value, np.float64).reshape(3), kind, grid)
+    if form == "spectrum":
+        wl, v = (np.asarray(a, np.float64) for a in value)
+        return np.interp(grid, wl, v, left=0.0, right=0.0)
+    if form == "blackbody":
+        from ..radiometry import planck
+
+        temperature = float(value["temperature"])
+        if not temperature > 0:
+            raise ValueError(f"Blackbody temperature must be > 0 [K], got {temperature}.")
+        return float(value.get("scale", 1.0)) * np.asarray(planck(grid, temperature), np.float64)
+    if form == "value":
+        return np.full(grid.shape, float(value))
+    raise ValueError(
+        f"Unknown spectrum form {form!r}; valid forms are 'rgb', 'spectrum', 'blackbody', 'value'."
+    )

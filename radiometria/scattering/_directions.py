@@ -90,7 +90,7 @@ def normalize(v) -> Array:
 
     **Returns:**
 
-    Unit vectors `(..., 3)`. [dimensionless]
+    Unit vectors `(..., 3)`. [dimensionless] (`Pharr2023` section 3.3.)
     """
     v = _direction(v, "v")
     n2 = jnp.sum(v * v, axis=-1, keepdims=True)
@@ -243,7 +243,7 @@ def coordinate_system(n) -> tuple[Array, Array]:
 
 
 class Frame(eqx.Module):
-    """An orthonormal shading frame `(s, t, n)`; local coordinates put `n` on +z.
+    """An orthonormal shading frame `(s, t, n)`; local coordinates put `n` on +z (thesis 3.1.1).
 
     Build it from a normal with `Frame.from_z(n)` (which uses `coordinate_system`) or from
     a normal and a tangent with `Frame.from_xz(s, n)`. Arrays may carry batch axes.
@@ -287,7 +287,10 @@ def to_local(frame, v) -> Array:
 
     **Returns:**
 
-    Local coordinates `(..., 3)`; the normal maps to +z.
+    Local coordinates `(..., 3)`; the normal maps to +z. [same unit as `v`]
+
+    ??? cite "References"
+        `Pharr2023` section 3.8.3.
     """
     s, t, n = _frame_axes(frame)
     v = _direction(v, "v")
@@ -304,7 +307,10 @@ def to_world(frame, v) -> Array:
 
     **Returns:**
 
-    World-space vectors `(..., 3)`; inverse of `to_local`.
+    World-space vectors `(..., 3)`; inverse of `to_local`. [same unit as `v`]
+
+    ??? cite "References"
+        `Pharr2023` section 3.8.3.
     """
     s, t, n = _frame_axes(frame)
     v = _direction(v, "v")
@@ -317,43 +323,67 @@ def to_world(frame, v) -> Array:
 
 
 def cos_theta(w) -> Array:
-    r"""$\cos\theta = \omega_z$ of a local direction `(..., 3)`. [dimensionless]"""
+    r"""$\cos\theta = \omega_z$ of a local direction `(..., 3)`. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     return _direction(w, "w")[..., 2]
 
 
 def abs_cos_theta(w) -> Array:
-    r"""$|\cos\theta| = |\omega_z|$ of a local direction `(..., 3)`. [dimensionless]"""
+    r"""$|\cos\theta| = |\omega_z|$ of a local direction `(..., 3)`. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     return jnp.abs(cos_theta(w))
 
 
 def cos2_theta(w) -> Array:
-    r"""$\cos^2\theta$ of a local direction `(..., 3)`. [dimensionless]"""
+    r"""$\cos^2\theta$ of a local direction `(..., 3)`. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     z = cos_theta(w)
     return z * z
 
 
 def sin2_theta(w) -> Array:
-    r"""$\sin^2\theta = \max(0, 1 - \cos^2\theta)$ of a local direction. [dimensionless]"""
+    r"""$\sin^2\theta = \max(0, 1 - \cos^2\theta)$ of a local direction. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     return jnp.maximum(0.0, 1.0 - cos2_theta(w))
 
 
 def sin_theta(w) -> Array:
-    r"""$\sin\theta \ge 0$ of a local direction (finite gradient at the pole). [dimensionless]"""
+    r"""$\sin\theta \ge 0$ of a local direction (finite gradient at the pole). [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     return _safe_sqrt(sin2_theta(w))
 
 
 def tan_theta(w) -> Array:
-    r"""$\tan\theta = \sin\theta/\cos\theta$; infinite at grazing angles. [dimensionless]"""
+    r"""$\tan\theta = \sin\theta/\cos\theta$; infinite at grazing angles. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     return sin_theta(w) / cos_theta(w)
 
 
 def tan2_theta(w) -> Array:
-    r"""$\tan^2\theta$; infinite at grazing angles. [dimensionless]"""
+    r"""$\tan^2\theta$; infinite at grazing angles. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     return sin2_theta(w) / cos2_theta(w)
 
 
 def cos_phi(w) -> Array:
-    r"""$\cos\varphi = \omega_x/\sin\theta$, 1 at the pole. [dimensionless]"""
+    r"""$\cos\varphi = \omega_x/\sin\theta$, 1 at the pole. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     w = _direction(w, "w")
     s = sin_theta(w)
     ok = s > 0
@@ -361,7 +391,10 @@ def cos_phi(w) -> Array:
 
 
 def sin_phi(w) -> Array:
-    r"""$\sin\varphi = \omega_y/\sin\theta$, 0 at the pole. [dimensionless]"""
+    r"""$\sin\varphi = \omega_y/\sin\theta$, 0 at the pole. [dimensionless]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     w = _direction(w, "w")
     s = sin_theta(w)
     ok = s > 0
@@ -380,6 +413,9 @@ def spherical_direction(sin_theta, cos_theta, phi) -> Array:
     **Returns:**
 
     Directions `(..., 3)` in the local frame. [unit vector]
+
+    ??? cite "References"
+        `Pharr2023` section 3.8.3.
     """
     st = jnp.clip(as_float_array(sin_theta, "sin_theta"), -1.0, 1.0)
     ct = jnp.clip(as_float_array(cos_theta, "cos_theta"), -1.0, 1.0)
@@ -391,21 +427,27 @@ def spherical_direction(sin_theta, cos_theta, phi) -> Array:
 def spherical_theta(v) -> Array:
     r"""Polar angle $\theta \in [0, \pi]$ of a unit vector, measured from +z. [rad]
 
-    Computed as `arctan2(sqrt(x^2 + y^2), z)`, accurate near the poles.
+    Computed as `arctan2(sqrt(x^2 + y^2), z)`, accurate near the poles (`Pharr2023` 3.8.3).
     """
     v = _direction(v, "v")
     return jnp.arctan2(jnp.sqrt(v[..., 0] ** 2 + v[..., 1] ** 2), v[..., 2])
 
 
 def spherical_phi(v) -> Array:
-    r"""Azimuth $\varphi \in [0, 2\pi)$ of a vector about +z (0 at the pole). [rad]"""
+    r"""Azimuth $\varphi \in [0, 2\pi)$ of a vector about +z (0 at the pole). [rad]
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     v = _direction(v, "v")
     p = jnp.arctan2(v[..., 1], v[..., 0])
     return jnp.where(p < 0, p + 2.0 * jnp.pi, p)
 
 
 def same_hemisphere(w, wp) -> Array:
-    """True where two local directions lie strictly on the same side of the surface."""
+    """True where two local directions `(..., 3)` [unit vectors] lie strictly on one side.
+
+    `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
+    """
     w = _direction(w, "w")
     wp = _direction(wp, "wp")
     a, b = _align(w[..., 2], wp[..., 2])

@@ -390,6 +390,9 @@ def fresnel_schlick_f0(eta) -> Array:
     **Returns:**
 
     $F_0$ in [0, 1). [dimensionless]
+
+    ??? cite "References"
+        `Schlick1994`; thesis eq. (3.18) at normal incidence.
     """
     eta = _check_eta(eta)
     return ((eta - 1.0) / (eta + 1.0)) ** 2

@@ -63,7 +63,9 @@ __all__ = [
 def sellmeier(wavelength_nm, B, C) -> Array:
     r"""Sellmeier dispersion formula.
 
-    $$n^2(\lambda) = 1 + \sum_j \frac{B_j\lambda^2}{\lambda^2 - C_j},\qquad \lambda\ \text{in}\ \mu m$$
+    $$n^2(\lambda) = 1 + \sum_j \frac{B_j\lambda^2}{\lambda^2 - C_j}$$
+
+    with $\lambda$ in micrometres inside the formula.
 
     **Arguments:**
 
@@ -165,7 +167,7 @@ _TABLES = {m: (*_read_spd(f"{m}.eta.spd"), *_read_spd(f"{m}.k.spd")) for m in CO
 
 
 class TabulatedIOR(eqx.Module):
-    """A tabulated complex index of refraction $\\eta(\\lambda) + i k(\\lambda)$.
+    """A tabulated complex index of refraction $\\eta(\\lambda) + i k(\\lambda)$ (`Palik1985`).
 
     Calling it interpolates linearly in wavelength and holds the end values outside the table.
 
@@ -193,7 +195,11 @@ class TabulatedIOR(eqx.Module):
 
 
 def get_conductor(name: str) -> TabulatedIOR:
-    """The tabulated complex index of `"Au"`, `"Ag"`, `"Cu"` or `"Al"` (see module docstring)."""
+    """The tabulated complex index of `"Au"`, `"Ag"`, `"Cu"` or `"Al"` (`Palik1985`).
+
+    Returns a `TabulatedIOR` (wavelengths [nm], `eta`, `k` [dimensionless]); see the module
+    docstring for provenance.
+    """
     wl_e, e, wl_k, k = lookup(_TABLES, name, "conductor")
     return TabulatedIOR(name, jnp.asarray(wl_e), jnp.asarray(e), jnp.asarray(wl_k), jnp.asarray(k))
 

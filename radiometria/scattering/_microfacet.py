@@ -15,6 +15,7 @@ from jax import Array
 
 from .._checks import as_float_array
 from ._directions import _align, _safe_sqrt
+from ._warps import _sample_disk_concentric
 
 __all__ = ["TrowbridgeReitzDistribution", "roughness_to_alpha"]
 
@@ -183,10 +184,9 @@ class TrowbridgeReitzDistribution(eqx.Module):
         t2x = -hz * t1y
         t2y = hz * t1x
         t2z = hx * t1y - hy * t1x
-        # Uniformly distributed point on the unit disk (polar mapping, as pbrt).
-        r = jnp.sqrt(u0)
-        phi = 2.0 * jnp.pi * u1
-        px, py = r * jnp.cos(phi), r * jnp.sin(phi)
+        # Uniformly distributed point on the unit disk (concentric mapping, as Mitsuba; pbrt
+        # uses the polar one: any uniform disk sample gives the same distribution).
+        px, py = _sample_disk_concentric(u0, u1)
         # Warp the disk to the projection of the visible hemisphere.
         h = _safe_sqrt(1.0 - px * px)
         s = 0.5 * (1.0 + hz)

@@ -5,8 +5,8 @@ for a given geometry of incidence and collection (`Nicodemus1977`, thesis table 
 
 | function | incident | collected | thesis |
 |---|---|---|---|
-| `directional_hemispherical_reflectance(bxdf, wi)` | direction $\omega_i$ | hemisphere | table 3.2 |
-| `hemispherical_directional_reflectance(bxdf, wo)` | hemisphere | direction $\omega_o$ | eq. 3.5 |
+| `directional_hemispherical_reflectance(bxdf, wi)` | direction | hemisphere | table 3.2 |
+| `hemispherical_directional_reflectance(bxdf, wo)` | hemisphere | direction | eq. 3.5 |
 | `directional_conical_reflectance(bxdf, wi, cone)` | direction | cone $\Omega$ | table 3.2 |
 | `conical_hemispherical_reflectance(bxdf, cone)` | cone | hemisphere | table 3.2 |
 | `hemispherical_conical_reflectance(bxdf, cone)` | hemisphere | cone | table 3.2 |
@@ -17,11 +17,12 @@ $$\rho(\Omega_i, \Omega_o) = \frac{1}{\Omega'_i}\int_{\Omega_i}\int_{\Omega_o}
   f(\omega_o, \omega_i)\,|\cos\theta_o|\,|\cos\theta_i|\,d\omega_o\,d\omega_i,\qquad
   \Omega'_i = \int_{\Omega_i}|\cos\theta_i|\,d\omega_i$$
 
-and its directional limits, with uniform incident radiance over $\Omega_i$. For incidence from the whole hemisphere $\Omega'_i = \pi$, the thesis's
-normalisation. For a *cone* of incidence the thesis prints the same $1/\pi$; this module follows
-Nicodemus et al. (1977) and divides by the projected solid angle $\Omega'_i$ of the incident
-cone, so that a perfect white reflector has reflectance 1 for every geometry (the two agree when
-the cone is the hemisphere).
+and its directional limits, with uniform incident radiance over $\Omega_i$. For incidence from
+the whole hemisphere $\Omega'_i = \pi$, the thesis's normalisation. For a *cone* of incidence
+the thesis prints the same $1/\pi$; this module follows Nicodemus et al. (1977) and divides
+by the projected solid angle $\Omega'_i$ of the incident cone (`Nicodemus1977`), so that a
+perfect white reflector has reflectance 1 for every geometry (the two agree when the cone is the
+hemisphere).
 
 "Hemispherical-directional reflectance" here is the thesis's eq. (3.5), which the thesis calls
 the albedo, $\rho(\omega_o) = \int f(\omega_o,\omega_i)|\cos\theta_i|\,d\omega_i$; the
@@ -65,7 +66,9 @@ __all__ = [
 
 
 class Cone(eqx.Module):
-    r"""A cone of directions: unit `axis` `(3,)` and half-angle $\gamma$ (`cos_half_angle`).
+    r"""A cone of directions for the conical reflectances of thesis table 3.2.
+
+    Unit `axis` `(3,)` and half-angle $\gamma$ (stored as `cos_half_angle`).
 
     The cone must lie above the horizon of the local frame, $\theta_{axis} + \gamma \le \pi/2$
     (checked). Its solid angle is $2\pi(1 - \cos\gamma)$ and its projected solid angle
@@ -306,6 +309,7 @@ def conical_hemispherical_reflectance(bxdf, cone: Cone, **kwargs) -> Estimate:
     """Conical-hemispherical reflectance: incidence over `cone`, collection over the hemisphere.
 
     See `biconical_reflectance` (keywords `n_samples`, `key`, `u`). Thesis table 3.2.
+    Returns an `Estimate` of the reflectance `(n_lambda,)`. [dimensionless]
     """
     return biconical_reflectance(bxdf, cone, None, **kwargs)
 
@@ -314,6 +318,7 @@ def hemispherical_conical_reflectance(bxdf, cone: Cone, **kwargs) -> Estimate:
     """Hemispherical-conical reflectance: incidence over the hemisphere, collection over `cone`.
 
     See `biconical_reflectance` (keywords `n_samples`, `key`, `u`). Thesis table 3.2.
+    Returns an `Estimate` of the reflectance `(n_lambda,)`. [dimensionless]
     """
     return biconical_reflectance(bxdf, None, cone, **kwargs)
 
@@ -324,6 +329,7 @@ def bihemispherical_reflectance(bxdf, **kwargs) -> Estimate:
     $$\rho = \frac1\pi\int\int f|\cos\theta_o\cos\theta_i|\,d\omega_o d\omega_i$$
 
     The spherical albedo: the fraction of uniformly incident flux that is reflected. See
-    `biconical_reflectance` (keywords `n_samples`, `key`, `u`).
+    `biconical_reflectance` (keywords `n_samples`, `key`, `u`). Returns an `Estimate`
+    `(n_lambda,)`. [dimensionless]
     """
     return biconical_reflectance(bxdf, None, None, **kwargs)

@@ -36,7 +36,8 @@ from .._checks import as_float_array, check_last_axis
 from ._forward import ForwardModel, XYZ_to_Lab_white, forward_model, lab_f
 from ._sigmoid_polynomial import _sigmoid, normalised_to_nm_coefficients
 
-DEFAULT_TOLERANCE = 5e-3  # Delta E*ab; the table's per-entry convergence criterion (float32 floor ~2e-3 near white)
+# Delta E*ab: the table's per-entry convergence criterion (the float32 floor is ~2e-3 near white).
+DEFAULT_TOLERANCE = 5e-3
 
 
 class ModelArrays(eqx.Module):
@@ -63,6 +64,7 @@ class ModelArrays(eqx.Module):
 
 
 def _polynomial(c: Array, lam: Array) -> Array:
+    lam = lam.reshape((1,) * (c.ndim - 1) + lam.shape)
     return (c[..., 0:1] * lam + c[..., 1:2]) * lam + c[..., 2:3]
 
 
@@ -105,15 +107,18 @@ def residual_and_jacobian(c: Array, lab_t: Array, m: ModelArrays, chunk: int | N
     n = c.shape[0]
     if chunk is None or chunk >= n:
         xyz, dxyz = _xyz_and_jacobian(c, m)  # (n, 3), (n, 3 [XYZ], 3 [c])
-        t = xyz / m.white
+        white = m.white[None, :]
+        t = xyz / white
         f, fp = jax.jvp(lab_f, (t,), (jnp.ones_like(t),))
-        g = fp / m.white  # d f(X / Xn) / dX etc.
+        g = fp / white  # d f(X / Xn) / dX etc.
         L = 116.0 * f[:, 1] - 16.0
         a = 500.0 * (f[:, 0] - f[:, 1])
         b = 200.0 * (f[:, 1] - f[:, 2])
         dX, dY, dZ = dxyz[:, 0], dxyz[:, 1], dxyz[:, 2]
         gx, gy, gz = g[:, 0:1], g[:, 1:2], g[:, 2:3]
-        J = jnp.stack([116.0 * gy * dY, 500.0 * (gx * dX - gy * dY), 200.0 * (gy * dY - gz * dZ)], 1)
+        J = jnp.stack(
+            [116.0 * gy * dY, 500.0 * (gx * dX - gy * dY), 200.0 * (gy * dY - gz * dZ)], 1
+        )
         return jnp.stack([L, a, b], -1) - lab_t, J
     pad = (-n) % chunk
     cp = jnp.pad(c, ((0, pad), (0, 0)))
@@ -139,6 +144,7 @@ def _lm_direction(J: Array, r: Array, mu: Array) -> Array:
     d = jnp.sqrt(jnp.sum(J * J, axis=-2))  # (n, 3) column norms
     damp = jnp.sqrt(mu)[..., None] * d  # (n, 3)
     eye = jnp.eye(3, dtype=dtype)
+    eye = eye.reshape((1,) * (J.ndim - 2) + (3, 3))
     A = jnp.concatenate([J, damp[..., None, :] * eye], axis=-2)  # (n, 6, 3)
     b = jnp.concatenate([-r, jnp.zeros_like(r)], axis=-1)  # (n, 6)
     cols = [A[..., :, 0], A[..., :, 1], A[..., :, 2], b]
@@ -172,7 +178,9 @@ class LMState(eqx.Module):
     mu: Array  # (n,) damping
 
 
-def lm_init(c: Array, lab_t: Array, m: ModelArrays, mu0: float = 1e-4, chunk: int | None = None) -> LMState:
+def lm_init(
+    c: Array, lab_t: Array, m: ModelArrays, mu0: float = 1e-4, chunk: int | None = None
+) -> LMState:
     r, J = residual_and_jacobian(c, lab_t, m, chunk)
     cost = jnp.sum(r * r, axis=-1)
     cost = jnp.where(jnp.isfinite(cost), cost, jnp.inf)
@@ -200,7 +208,9 @@ def lm_step(s: LMState, lab_t: Array, m: ModelArrays, chunk: int | None = None) 
     )
 
 
-def lm_iterate(state: LMState, lab_t: Array, m: ModelArrays, n_steps, chunk: int | None = None) -> LMState:
+def lm_iterate(
+    state: LMState, lab_t: Array, m: ModelArrays, n_steps, chunk: int | None = None
+) -> LMState:
     """Exactly `n_steps` `lm_step`s (`lax.fori_loop`)."""
     return lax.fori_loop(0, n_steps, lambda _, s: lm_step(s, lab_t, m, chunk), state)
 
@@ -224,12 +234,13 @@ def lm_solve(
     Returns the number of steps taken and the final state.
     """
     n = state.cost.shape[0]
-    tol2 = jnp.asarray(tolerance, state.c.dtype) ** 2
-    limit = jnp.floor(allowed_fraction * n)
+    dtype = state.c.dtype
+    tol2 = jnp.asarray(tolerance, dtype) ** 2
+    limit = jnp.floor(jnp.asarray(allowed_fraction, dtype) * n)
 
     def cond(carry):
         i, s = carry
-        n_bad = jnp.sum(~(s.cost <= tol2))
+        n_bad = jnp.sum(~(s.cost <= tol2)).astype(dtype)
         return (i < max_steps) & ((i < min_steps) | (n_bad > limit))
 
     def body(carry):
@@ -368,7 +379,9 @@ def _check_rgb_values(rgb: Array, *, upper: float | None = 1.0, name: str = "rgb
         )
     a = np.asarray(rgb)
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"`{name}` has non-finite components (NaN or inf); linear RGB must be finite.")
+        raise ValueError(
+            f"`{name}` has non-finite components (NaN or inf); linear RGB must be finite."
+        )
     if np.any(a < 0):
         raise ValueError(
             f"`{name}` has negative components (min {a.min():.6g}); linear RGB must be >= 0 "

@@ -177,6 +177,6 @@ def lab_f(t: Array) -> Array:
 def XYZ_to_Lab_white(XYZ: Array, white_XYZ: Array) -> Array:
     """CIELAB of XYZ (..., 3) relative to `white_XYZ` (3,); the formula of
     `colorimetry.XYZ_to_Lab`, without its argument checks (it runs in the fitter's loop)."""
-    f = lab_f(XYZ / white_XYZ)
+    f = lab_f(XYZ / white_XYZ.reshape((1,) * (XYZ.ndim - 1) + (3,)))
     fx, fy, fz = f[..., 0], f[..., 1], f[..., 2]
     return jnp.stack([116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)], axis=-1)

@@ -29,7 +29,6 @@ res - 1) is set to the closed form, and its top node, white, to the finite
 same way): lookups of white itself take the exact grey path.
 """
 
-import dataclasses
 import time
 
 import equinox as eqx
@@ -38,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 from jax import lax
-from jaxtyping import Array, ArrayLike, Float, Int
+from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
 from ._fit import (
@@ -50,6 +49,7 @@ from ._fit import (
     lm_init,
     lm_iterate,
     lm_solve,
+    residual_and_jacobian,
     target_Lab,
 )
 from ._forward import forward_model
@@ -135,8 +135,13 @@ def _argmax_pbrt(rgb: Array) -> Array:
     return jnp.where(r > g, jnp.where(r > b, 0, 2), jnp.where(g > b, 1, 2))
 
 
+@eqx.filter_jit
 def lookup(lut: RGBToSpectrumLUT, rgb: Array) -> Array:
-    """pbrt's table lookup without argument checks (see `RGBToSpectrumLUT.coefficients`)."""
+    """pbrt's table lookup without argument checks (see `RGBToSpectrumLUT.coefficients`).
+
+    Jitted (one small XLA program instead of ~40 eagerly dispatched operations); it composes
+    with an outer `jit`, `vmap` or `grad` as usual.
+    """
     dtype = common_float_dtype(rgb, lut.coeffs)
     rgb = rgb.astype(dtype)
     coeffs = lut.coeffs.astype(dtype)
@@ -208,48 +213,97 @@ class LUTFitResult(eqx.Module):
     @property
     def converged(self) -> Array:
         """Boolean (3, res, res, res): the entry reached the tolerance (or is exact)."""
-        return self.result._value == optx.RESULTS.successful._value
+        return self.result._value == RESULTS.successful._value
+
+    @property
+    def out_of_reach(self) -> Array:
+        """Boolean (3, res, res, res): no sigmoid spectrum reaches the colour (best fit kept)."""
+        return self.result._value == RESULTS.out_of_reach._value
 
     def summary(self) -> dict:
-        """Residual distribution of the table points and convergence counts (plain floats)."""
+        """Residual distribution of the table points and outcome counts (plain Python)."""
         r = np.asarray(self.residual).ravel()
         fitted = ~np.asarray(self.exact).ravel()
         rf = r[fitted]
         q = np.quantile(rf, [0.5, 0.9, 0.99, 0.999, 1.0]) if rf.size else np.zeros(5)
+        conv = np.asarray(self.converged).ravel()
+        oor = np.asarray(self.out_of_reach).ravel()
         return {
             "entries": int(r.size),
             "fitted": int(fitted.sum()),
             "closed_form": int((~fitted).sum()),
-            "converged": int(np.asarray(self.converged).sum()),
-            "not_converged": int((~np.asarray(self.converged)).sum()),
+            "converged": int(conv.sum()),
+            "out_of_reach": int(oor.sum()),
+            "not_converged": int((~conv & ~oor).sum()),
             "repaired": self.num_repaired,
             "residual_median": float(q[0]),
             "residual_p90": float(q[1]),
             "residual_p99": float(q[2]),
             "residual_p999": float(q[3]),
             "residual_max": float(q[4]),
+            "residual_max_converged": float(np.max(r[conv & fitted], initial=0.0)),
             "tolerance": self.tolerance,
             "seconds": self.seconds,
         }
 
 
-def _results_where(ok: np.ndarray) -> optx.RESULTS:
-    """An `optimistix.RESULTS` array: `successful` where `ok`, else `nonlinear_max_steps_reached`."""
-    flat = jax.vmap(
-        lambda o: optx.RESULTS.where(o, optx.RESULTS.successful, optx.RESULTS.nonlinear_max_steps_reached)
-    )(jnp.asarray(ok).ravel())
-    return jax.tree_util.tree_map(lambda a: a.reshape(ok.shape), flat)
+class RESULTS(optx.RESULTS):
+    """Per-entry outcome of `fit_lut`: optimistix's `RESULTS` plus `out_of_reach`.
+
+    `successful`: within the tolerance (or set in closed form);
+    `nonlinear_max_steps_reached`: the iteration stopped above the tolerance away from a
+    stationary point (a failure; `fit_lut(throw=True)` raises);
+    `out_of_reach`: above the tolerance at a stationary point of the least-squares problem:
+    no sigmoid-polynomial reflectance in [0, 1] reproduces the colour (wide-gamut spaces have
+    colours beyond the object-colour solid), and the entry is the best fit.
+    """
+
+    out_of_reach = (
+        "No spectrum s(c0 l^2 + c1 l + c2) reproduces this colour within the tolerance; the "
+        "entry is the least-squares best fit (a stationary point)."
+    )
+
+
+def _results_array(code: np.ndarray) -> RESULTS:
+    """A `RESULTS` array from integer codes 0 (successful), 1 (max steps), 2 (out of reach)."""
+    items = [RESULTS.successful, RESULTS.nonlinear_max_steps_reached, RESULTS.out_of_reach]
+
+    def pick(cd):
+        return RESULTS.where(cd == 0, items[0], RESULTS.where(cd == 1, items[1], items[2]))
+
+    flat = jax.vmap(pick)(jnp.asarray(code).ravel())
+    return jax.tree_util.tree_map(lambda a: a.reshape(code.shape), flat)
+
+
+def _stationary(c: np.ndarray, targets: np.ndarray, m: ModelArrays, threshold: float = 1e-2):
+    """True where the least-squares gradient J^T r is negligible: |J^T r| <= t |J|_F |r|."""
+    if c.shape[0] == 0:
+        return np.zeros(0, bool)
+    size = 1 << int(np.ceil(np.log2(max(c.shape[0], 256))))
+    pad = size - c.shape[0]
+    cp = np.concatenate([c, np.zeros((pad, 3), c.dtype)])
+    tp = np.concatenate([targets, np.full((pad, 3), 0.5, targets.dtype)])
+    r, J = _rj_jit(jnp.asarray(cp), jnp.asarray(tp, cp.dtype), m)
+    r, J = np.asarray(r, np.float64)[: c.shape[0]], np.asarray(J, np.float64)[: c.shape[0]]
+    g = np.einsum("nki,nk->ni", J, r)
+    scale = np.sqrt(np.sum(J * J, axis=(1, 2)) * np.sum(r * r, axis=1))
+    return np.linalg.norm(g, axis=1) <= threshold * scale
+
+
+@jax.jit
+def _rj_jit(c, rgb, m):
+    return residual_and_jacobian(c, target_Lab(rgb, m), m, 512)
 
 
 def _column_directions(resolution: int, dtype) -> np.ndarray:
     """Unit-brightness RGB of every column (3 res res, 3): e[l] = 1, e[l+1] = x, e[l+2] = y."""
     t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
-    l, j, i = np.meshgrid(np.arange(3), np.arange(resolution), np.arange(resolution), indexing="ij")
+    j, i = np.meshgrid(np.arange(resolution), np.arange(resolution), indexing="ij")
     e = np.zeros((3, resolution, resolution, 3))
-    for ll in range(3):
-        e[ll, :, :, ll] = 1.0
-        e[ll, :, :, (ll + 1) % 3] = t[i[ll]]
-        e[ll, :, :, (ll + 2) % 3] = t[j[ll]]
+    for ch in range(3):
+        e[ch, :, :, ch] = 1.0
+        e[ch, :, :, (ch + 1) % 3] = t[i]
+        e[ch, :, :, (ch + 2) % 3] = t[j]
     return e.reshape(-1, 3).astype(dtype)
 
 
@@ -335,7 +389,9 @@ def _make_fit_fn(m: ModelArrays, scale, k0, chunk: int, mesh=None):
 
     def blocks(e, schedule):
         nb = e.shape[0] // chunk
-        c, r, it = lax.map(lambda eb: _fit_columns(eb, scale, k0, m, schedule), e.reshape(nb, chunk, 3))
+        c, r, it = lax.map(
+            lambda eb: _fit_columns(eb, scale, k0, m, schedule), e.reshape(nb, chunk, 3)
+        )
         res = scale.shape[0]
         c = jnp.moveaxis(c, 0, 1).reshape(res, nb * chunk, 3)
         r = jnp.moveaxis(r, 0, 1).reshape(res, nb * chunk)
@@ -365,7 +421,9 @@ def _repair(coeffs, resid, e, scale, m, tol, exact, n_steps, rounds, chunk):
     res = scale.shape[0]
     n_repaired = 0
     lm = jax.jit(
-        lambda c, lab_t: lm_iterate(lm_init(c, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk),
+        lambda c, lab_t: lm_iterate(
+            lm_init(c, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk
+        ),
     )
     for _ in range(rounds):
         bad = (resid > tol) & ~exact
@@ -522,7 +580,12 @@ def fit_lut(
     exact[:, grey_cols] = True
     resid[0] = 0.0
     # (2) Retry the columns with an entry above the tolerance, with more iterations.
-    bad_cols = np.flatnonzero(((resid > tolerance) & ~exact).any(axis=0))
+    bad = (resid > tolerance) & ~exact
+    ks, cols = np.nonzero(bad)
+    targets = e_np[cols] * scale_np[ks][:, None]
+    stationary = np.zeros_like(bad)
+    stationary[ks, cols] = _stationary(coeffs[ks, cols], targets, m)
+    bad_cols = np.flatnonzero((bad & ~stationary).any(axis=0))
     n_retried = int(bad_cols.size)
     if bad_cols.size:
         sched2 = _Schedule.make(2 * n_first, retry_steps, min_steps, sweep_tol, 0.0, dtype)
@@ -534,9 +597,14 @@ def fit_lut(
         coeffs[:, bad_cols], resid[:, bad_cols] = sub_c, sub_r
     # (3) Host-side repair from neighbours for what is left.
     coeffs, resid, n_repaired = _repair(
-        coeffs, resid, e_np.astype(dtype), scale_np.astype(dtype), m, tolerance, exact,
-        repair_steps, repair_rounds, None,
+        coeffs, resid, e_np.astype(dtype), scale_np.astype(dtype), m, tolerance,
+        exact | stationary, repair_steps, repair_rounds, None,
     )  # fmt: skip
+    # Classify what is left: stationary (out of reach) or not.
+    bad = (resid > tolerance) & ~exact
+    ks, cols = np.nonzero(bad)
+    stationary = np.zeros_like(bad)
+    stationary[ks, cols] = _stationary(coeffs[ks, cols], e_np[cols] * scale_np[ks][:, None], m)
     if progress is not None:
         progress("repair", 1, 1)
     coeffs[0] = coeffs[1]
@@ -546,8 +614,10 @@ def fit_lut(
     table = coeffs_nm.reshape(res, 3, res, res, 3).transpose(1, 0, 2, 3, 4)
     resid_t = resid.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
     exact_t = exact.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
+    stat_t = stationary.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
     ok = (resid_t <= tolerance) | exact_t
-    result = _results_where(ok)
+    code = np.where(ok, 0, np.where(stat_t, 2, 1))
+    result = _results_array(code)
     lut = RGBToSpectrumLUT(jnp.asarray(scale_np, dtype), jnp.asarray(table), model.colourspace)
     settings = {
         **model.description(),
@@ -578,12 +648,13 @@ def fit_lut(
         seconds=time.perf_counter() - t_start,
         settings=settings,
     )
-    if throw and not ok.all():
-        n_bad = int((~ok).sum())
-        worst = np.unravel_index(np.argmax(np.where(ok, -np.inf, resid_t)), resid_t.shape)
+    failed = code == 1
+    if throw and failed.any():
+        worst = np.unravel_index(np.argmax(np.where(failed, resid_t, -np.inf)), resid_t.shape)
         raise RuntimeError(
-            f"fit_lut({model.colourspace!r}, {res}): {n_bad} entries did not reach Delta E*ab <= "
-            f"{tolerance}; worst at index {tuple(int(w) for w in worst)} with residual "
-            f"{float(resid_t[worst]):.3g}. Pass throw=False to inspect `result` and `residual`."
+            f"fit_lut({model.colourspace!r}, {res}): {int(failed.sum())} entries stopped above "
+            f"Delta E*ab = {tolerance} away from a stationary point; worst at index "
+            f"{tuple(int(w) for w in worst)} with residual {float(resid_t[worst]):.3g}. Pass "
+            "throw=False to inspect `result` and `residual`."
         )
     return out

@@ -17,7 +17,7 @@ on the first and max 0.39 on the second):
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, ArrayLike
+from jaxtyping import ArrayLike
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
 from ._fit import _check_rgb_values
@@ -142,5 +142,7 @@ def roundtrip_statistics(delta_E: ArrayLike, rgb: ArrayLike | None = None) -> di
         "median": float(np.median(d)),
         "p99": float(np.quantile(d, 0.99)),
         "max": float(d.max()),
-        "worst_rgb": None if rgb is None else [float(v) for v in np.asarray(rgb).reshape(-1, 3)[worst]],
+        "worst_rgb": None
+        if rgb is None
+        else [float(v) for v in np.asarray(rgb).reshape(-1, 3)[worst]],
     }

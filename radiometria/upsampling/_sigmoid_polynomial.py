@@ -99,6 +99,10 @@ def _evaluate(coeffs: Array, wavelength: Array) -> Array:
     if scalar:
         lam = lam[None]
     c0, c1, c2 = c[..., 0:1], c[..., 1:2], c[..., 2:3]
+    # Explicit broadcasting (rank promotion may be disabled): pad both to the same rank.
+    rank = max(c0.ndim, lam.ndim)
+    c0, c1, c2 = (a.reshape((1,) * (rank - a.ndim) + a.shape) for a in (c0, c1, c2))
+    lam = lam.reshape((1,) * (rank - lam.ndim) + lam.shape)
     x = (c0 * lam + c1) * lam + c2  # Horner, as pbrt's EvaluatePolynomial
     s = _sigmoid(x)
     return s[..., 0] if scalar else s

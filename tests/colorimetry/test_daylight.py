@@ -15,14 +15,20 @@ colour = pytest.importorskip("colour")
 def test_daylight_spd_matches_colour(rounding):
     wl = np.arange(300.0, 831.0, 5.0)
     for T in [4000.0, 5003.0, 6504.0, 9000.0, 25000.0]:
-        ref = colour.sd_CIE_illuminant_D_series(colour.temperature.CCT_to_xy_CIE_D(T), M1_M2_rounding=rounding)
+        ref = colour.sd_CIE_illuminant_D_series(
+            colour.temperature.CCT_to_xy_CIE_D(T), M1_M2_rounding=rounding
+        )
         np.testing.assert_allclose(ref.wavelengths, wl)
-        np.testing.assert_allclose(rc.daylight_spd(T, wl, rounding=rounding), ref.values, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(
+            rc.daylight_spd(T, wl, rounding=rounding), ref.values, rtol=1e-12, atol=1e-12
+        )
 
 
 def test_daylight_locus_matches_colour():
     T = np.linspace(4000.0, 25000.0, 50)
-    np.testing.assert_allclose(rc.daylight_locus_xy(T), colour.temperature.CCT_to_xy_CIE_D(T), rtol=1e-13)
+    np.testing.assert_allclose(
+        rc.daylight_locus_xy(T), colour.temperature.CCT_to_xy_CIE_D(T), rtol=1e-13
+    )
 
 
 def test_daylight_spd_reproduces_packaged_D65():
@@ -42,7 +48,9 @@ def test_daylight_spd_batch_interpolation_and_grad():
     S5 = rc.daylight_spd(6500.0, jnp.arange(380.0, 781.0, 5.0))
     np.testing.assert_allclose(S[0, 1, 2], 0.6 * S5[0] + 0.4 * S5[1], rtol=1e-13)
     np.testing.assert_allclose(jax.jit(rc.daylight_spd)(T, wl), S, rtol=1e-14)
-    check_grads(lambda t: rc.daylight_spd(t, wl[::40], rounding=False), (jnp.array(6000.0),), order=1)
+    check_grads(
+        lambda t: rc.daylight_spd(t, wl[::40], rounding=False), (jnp.array(6000.0),), order=1
+    )
 
 
 def test_daylight_bad_input():

@@ -34,6 +34,10 @@ def _colour_derived(name):
 def test_colourspaces_present():
     assert set(NAMES) <= set(rc.RGB_COLOURSPACES)
     assert rc.get_colourspace("Rec.2020") is rc.RGB_COLOURSPACES["ITU-R BT.2020"]
+    assert rc.RGB_COLOURSPACES["Rec.2020"] is rc.RGB_COLOURSPACES["ITU-R BT.2020"]
+    assert "Rec.2020" in rc.RGB_COLOURSPACES and "Rec.2020" not in list(rc.RGB_COLOURSPACES)
+    with pytest.raises(KeyError, match="'sRGB'"):
+        rc.RGB_COLOURSPACES["Rec.2021"]
     for n in NAMES:
         cs = rc.RGB_COLOURSPACES[n]
         assert cs.name == n

@@ -53,13 +53,18 @@ def test_CCT_to_uv_matches_colour_and_roundtrips():
 def test_robertson_and_mccamy_match_colour():
     uv = colour.temperature.CCT_to_uv_Ohno2013(np.stack([T_REF, DUV_REF], -1), cmfs=CMFS)
     np.testing.assert_allclose(
-        rc.uv_to_CCT(uv, "Robertson 1968"), colour.temperature.uv_to_CCT_Robertson1968(uv), rtol=1e-12, atol=1e-14
+        rc.uv_to_CCT(uv, "Robertson 1968"),
+        colour.temperature.uv_to_CCT_Robertson1968(uv),
+        rtol=1e-12,
+        atol=1e-14,
     )
     xy = colour.UCS_uv_to_xy(uv)
     np.testing.assert_allclose(
         rc.xy_to_CCT(xy, "McCamy 1992"), colour.temperature.xy_to_CCT_McCamy1992(xy), rtol=1e-12
     )
-    np.testing.assert_allclose(rc.xy_to_CCT(xy, "Robertson 1968"), rc.uv_to_CCT(uv, "Robertson 1968"), rtol=1e-12)
+    np.testing.assert_allclose(
+        rc.xy_to_CCT(xy, "Robertson 1968"), rc.uv_to_CCT(uv, "Robertson 1968"), rtol=1e-12
+    )
 
 
 @pytest.mark.parametrize(
@@ -94,7 +99,9 @@ def test_CCT_of_A_and_D65_from_their_spectra():
 
 def test_CCT_to_xy_loci():
     T = np.array([4000.0, 6504.0, 10000.0, 25000.0])
-    np.testing.assert_allclose(rc.CCT_to_xy(T, "daylight"), colour.temperature.CCT_to_xy_CIE_D(T), rtol=1e-13)
+    np.testing.assert_allclose(
+        rc.CCT_to_xy(T, "daylight"), colour.temperature.CCT_to_xy_CIE_D(T), rtol=1e-13
+    )
     xy = rc.CCT_to_xy(T, c2=C2_CIE)
     ref = colour.UCS_uv_to_xy(colour.temperature.CCT_to_uv_Planck1900(T, CMFS))
     np.testing.assert_allclose(xy, ref, rtol=1e-12)

@@ -212,3 +212,20 @@ def test_chi2_sidak_threshold_and_bad_arguments():
             n_samples=10,
             key=jax.random.key(0),
         )
+
+
+@pytest.mark.parametrize("generator", ["threefry", "hash"])
+def test_independent_generators_are_uniform(generator):
+    res = mc.chi2_test(
+        lambda k: mc.independent(100_000, 2, key=k, generator=generator),
+        lambda x: jnp.ones(x.shape[0]),
+        domain="square",
+        n_samples=100_000,
+        key=jax.random.key(13),
+    )
+    assert res.passed, res.message
+    x = np.asarray(mc.independent(100_000, 4, key=jax.random.key(14), generator=generator))
+    c = np.corrcoef(x.T)
+    assert np.all(np.abs(c - np.eye(4)) < 0.02)  # 5 sigma for 1e5 samples is 0.016
+    with pytest.raises(ValueError, match="generator"):
+        mc.independent(4, 2, key=jax.random.key(0), generator="pcg")
