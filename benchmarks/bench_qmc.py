@@ -18,13 +18,22 @@ Times, in the same run, warm (compile excluded, reported separately), best of R 
    (`default_rng().random((n, 3))`, float64, and float32).
 
 Reference figures measured earlier on this machine: SciPy Sobol scrambled 0.066 s, SciPy Halton
-scrambled 1.66 s. `--quick` divides the sizes by 16. Prints a ratio per comparison
+scrambled 1.66 s. `--quick` divides the sizes by 16; `--single-thread` runs XLA on one thread for a per-core
+comparison (SciPy and NumPy are single-threaded here). Prints a ratio per comparison
 (> 1 means radiometria is faster).
 """
 
 import argparse
 import math
+import os
+import sys
 import time
+
+if "--single-thread" in sys.argv:  # must be set before JAX starts its CPU client
+    os.environ["XLA_FLAGS"] = (
+        os.environ.get("XLA_FLAGS", "")
+        + " --xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+    )
 
 import jax
 import jax.numpy as jnp
@@ -62,6 +71,12 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="sizes / 16")
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument(
+        "--single-thread",
+        action="store_true",
+        help="one XLA CPU thread (SciPy and NumPy use one): a per-core comparison that is also "
+        "robust on a busy machine",
+    )
     args = parser.parse_args()
     from scipy.stats import qmc
 

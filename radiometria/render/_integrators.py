@@ -31,6 +31,7 @@ padded Sobol sampler stratifies).
 """
 
 import functools
+from collections.abc import Callable
 
 import equinox as eqx
 import jax
@@ -118,7 +119,7 @@ def path_radiance(
     origins: Float[Array, "n 3"],
     directions: Float[Array, "n 3"],
     wavelength_nm: Float[Array, "n k"],
-    u: Float[Array, "n d"],
+    u: Float[Array, "n d"] | Callable[[Array, Array], Float[Array, "m 8"]],
     *,
     max_depth: int,
     rr_depth: int = 5,

@@ -1,0 +1,127 @@
+"""Rays per second of radiometria's BVH against Embree and brute force, on icospheres.
+
+Incoherent closest-hit rays: origins uniform in [-1.5, 1.5]^3 around a unit icosphere of
+1280 to 1.3 M triangles, directions uniform on the sphere (about 27 % of the rays hit). The same
+rays go through `radiometria.render.intersect_closest` (float32, after a warm-up call that
+compiles), through Embree (`embreex`, `pip install embreex`, a benchmark-only dependency; its
+`run` traces one ray at a time on one thread) and, for small meshes, through
+`intersect_brute_force_closest`. The process is pinned to one core by default, as Embree is
+single-threaded here; `--all-cores` lets XLA use every core. The best of `--repeats` runs is
+reported.
+
+    .venv/bin/python benchmarks/bench_rays.py [--subdivisions 3 5 6 8] [--rays 262144]
+"""
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+
+def _best_time(fn, repeats: int) -> float:
+    fn()  # warm-up (compiles)
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--subdivisions", type=int, nargs="+", default=[3, 5, 6, 8])
+    parser.add_argument("--rays", type=int, default=1 << 18)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--brute-max", type=int, default=20480, help="largest mesh for brute force")
+    parser.add_argument("--all-cores", action="store_true", help="do not pin to one core")
+    args = parser.parse_args(argv)
+    if not args.all_cores and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})  # before JAX starts threads
+
+    import jax
+    import jax.numpy as jnp
+
+    from radiometria.render import (
+        TriangleMesh,
+        build_bvh,
+        icosphere,
+        intersect_any,
+        intersect_brute_force_closest,
+        intersect_closest,
+    )
+
+    try:
+        import embreex.rtcore_scene as rtcs
+        from embreex.mesh_construction import TriangleMesh as EmbreeMesh
+    except ImportError:
+        rtcs = None
+        print(
+            "embreex is not installed: `pip install embreex` to compare with Embree",
+            file=sys.stderr,
+        )
+
+    rng = np.random.default_rng(0)
+    n = args.rays
+    o = rng.uniform(-1.5, 1.5, (n, 3)).astype(np.float32)
+    d = rng.normal(size=(n, 3)).astype(np.float32)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    oj, dj = jnp.asarray(o), jnp.asarray(d)
+    tmax = jnp.full(n, jnp.inf, jnp.float32)
+    cores = "all cores" if args.all_cores else "1 core"
+    print(
+        f"{n} incoherent rays, float32, {cores}, jax {jax.__version__} on {jax.devices()[0].platform}"
+    )
+    header = (
+        f"{'triangles':>10} {'build s':>8} {'depth':>5} {'closest Mray/s':>14} {'any Mray/s':>10} "
+        f"{'Embree Mray/s':>13} {'ours/Embree':>11} {'brute Mray/s':>12} {'hit %':>6}"
+    )
+    print(header)
+    print("-" * len(header))
+    for sub in args.subdivisions:
+        v, f = icosphere(sub)
+        t0 = time.perf_counter()
+        bvh = build_bvh(v.astype(np.float32), f)
+        build_s = time.perf_counter() - t0
+        hit = intersect_closest(bvh, oj, dj, tmax)
+        t_ours = _best_time(
+            lambda: intersect_closest(bvh, oj, dj, tmax).t.block_until_ready(), args.repeats
+        )
+        t_any = _best_time(
+            lambda: intersect_any(bvh, oj, dj, tmax).block_until_ready(), args.repeats
+        )
+        ours = n / t_ours / 1e6
+        any_rate = n / t_any / 1e6
+        emb = ratio = brute = float("nan")
+        if rtcs is not None:
+            scene = rtcs.EmbreeScene()
+            EmbreeMesh(scene, v.astype(np.float32)[f])
+            ids = scene.run(o, d)
+            agree = np.mean(ids == np.asarray(hit.prim))
+            if agree < 0.999:
+                print(
+                    f"warning: Embree and radiometria disagree on {100 * (1 - agree):.3f} % of rays"
+                )
+            emb = n / _best_time(lambda: scene.run(o, d), args.repeats) / 1e6
+            ratio = ours / emb
+        if len(f) <= args.brute_max:
+            mesh = TriangleMesh(jnp.asarray(v, jnp.float32), f)
+            m = min(n, max(4096, int(2e8 / len(f))))  # bound the work
+            ob, db, tb = oj[:m], dj[:m], tmax[:m]
+            t_b = _best_time(
+                lambda: intersect_brute_force_closest(mesh, ob, db, tb).t.block_until_ready(), 1
+            )
+            brute = m / t_b / 1e6
+        hit_pct = 100 * float(np.mean(np.asarray(hit.prim) >= 0))
+        print(
+            f"{len(f):>10} {build_s:>8.2f} {bvh.stack_size:>5} {ours:>14.3f} {any_rate:>10.3f} "
+            f"{emb:>13.3f} {ratio:>11.3f} {brute:>12.3f} {hit_pct:>6.1f}",
+            flush=True,
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
