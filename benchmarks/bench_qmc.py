@@ -18,9 +18,9 @@ Times, in the same run, warm (compile excluded, reported separately), best of R 
    (`default_rng().random((n, 3))`, float64, and float32).
 
 Reference figures measured earlier on this machine: SciPy Sobol scrambled 0.066 s, SciPy Halton
-scrambled 1.66 s. `--quick` divides the sizes by 16; `--single-thread` runs XLA on one thread for a per-core
-comparison (SciPy and NumPy are single-threaded here). Prints a ratio per comparison
-(> 1 means radiometria is faster).
+scrambled 1.66 s. `--quick` divides the sizes by 16; `--single-thread` runs XLA on one thread
+for a per-core comparison (SciPy and NumPy are single-threaded here). Prints a ratio per
+comparison (> 1 means radiometria is faster).
 """
 
 import argparse

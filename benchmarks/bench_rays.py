@@ -71,9 +71,8 @@ def main(argv=None) -> int:
     oj, dj = jnp.asarray(o), jnp.asarray(d)
     tmax = jnp.full(n, jnp.inf, jnp.float32)
     cores = "all cores" if args.all_cores else "1 core"
-    print(
-        f"{n} incoherent rays, float32, {cores}, jax {jax.__version__} on {jax.devices()[0].platform}"
-    )
+    platform = jax.devices()[0].platform
+    print(f"{n} incoherent rays, float32, {cores}, jax {jax.__version__} on {platform}")
     header = (
         f"{'triangles':>10} {'build s':>8} {'depth':>5} {'closest Mray/s':>14} {'any Mray/s':>10} "
         f"{'Embree Mray/s':>13} {'ours/Embree':>11} {'brute Mray/s':>12} {'hit %':>6}"
@@ -87,10 +86,10 @@ def main(argv=None) -> int:
         build_s = time.perf_counter() - t0
         hit = intersect_closest(bvh, oj, dj, tmax)
         t_ours = _best_time(
-            lambda: intersect_closest(bvh, oj, dj, tmax).t.block_until_ready(), args.repeats
+            lambda bvh=bvh: intersect_closest(bvh, oj, dj, tmax).t.block_until_ready(), args.repeats
         )
         t_any = _best_time(
-            lambda: intersect_any(bvh, oj, dj, tmax).block_until_ready(), args.repeats
+            lambda bvh=bvh: intersect_any(bvh, oj, dj, tmax).block_until_ready(), args.repeats
         )
         ours = n / t_ours / 1e6
         any_rate = n / t_any / 1e6
@@ -104,14 +103,17 @@ def main(argv=None) -> int:
                 print(
                     f"warning: Embree and radiometria disagree on {100 * (1 - agree):.3f} % of rays"
                 )
-            emb = n / _best_time(lambda: scene.run(o, d), args.repeats) / 1e6
+            emb = n / _best_time(lambda scene=scene: scene.run(o, d), args.repeats) / 1e6
             ratio = ours / emb
         if len(f) <= args.brute_max:
             mesh = TriangleMesh(jnp.asarray(v, jnp.float32), f)
             m = min(n, max(4096, int(2e8 / len(f))))  # bound the work
             ob, db, tb = oj[:m], dj[:m], tmax[:m]
             t_b = _best_time(
-                lambda: intersect_brute_force_closest(mesh, ob, db, tb).t.block_until_ready(), 1
+                lambda a=(mesh, ob, db, tb): intersect_brute_force_closest(
+                    *a
+                ).t.block_until_ready(),
+                1,
             )
             brute = m / t_b / 1e6
         hit_pct = 100 * float(np.mean(np.asarray(hit.prim) >= 0))

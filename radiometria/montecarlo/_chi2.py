@@ -112,6 +112,25 @@ def _to_coords(domain: str, samples: np.ndarray, n: int) -> tuple[np.ndarray, np
     return np.stack([z, phi], axis=-1), valid
 
 
+_TRACE_ERRORS = (
+    jax.errors.ConcretizationTypeError,
+    jax.errors.TracerArrayConversionError,
+    jax.errors.TracerBoolConversionError,
+    jax.errors.TracerIntegerConversionError,
+)
+
+
+def _call(fn, x):
+    """`equinox.filter_jit(fn)(x)`, or `fn(x)` eagerly when `fn` cannot be traced (NumPy code, say).
+
+    Jitting is only a speed-up here: one compilation instead of one per primitive.
+    """
+    try:
+        return eqx.filter_jit(fn)(x)
+    except _TRACE_ERRORS:
+        return fn(x)
+
+
 def _cell_integrals(pdf_fn, domain, bounds, res, cells: np.ndarray, q: int, dtype) -> np.ndarray:
     """Integral of the pdf over the given cells (flat indices), by q^k-point midpoint rules."""
     k = len(res)
@@ -122,18 +141,22 @@ def _cell_integrals(pdf_fn, domain, bounds, res, cells: np.ndarray, q: int, dtyp
     offs = np.stack(np.meshgrid(*([sub] * k), indexing="ij"), axis=-1).reshape(-1, k)  # (q^k, k)
     out = np.empty(len(cells))
     chunk = max(1, 2_000_000 // len(offs))
+    chunk = min(chunk, len(cells))
     for s in range(0, len(cells), chunk):
         ci = idx[s : s + chunk]
+        m = len(ci)
+        if m < chunk:  # pad the last chunk so that the jitted pdf compiles once
+            ci = np.concatenate([ci, np.repeat(ci[-1:], chunk - m, axis=0)])
         coords = lo + (ci[:, None, :] + offs[None, :, :]) * width  # (c, q^k, k)
         pts = _to_points(domain, coords.reshape(-1, k))
-        vals = np.asarray(pdf_fn(jnp.asarray(pts, dtype=dtype)), dtype=np.float64)
+        vals = np.asarray(_call(pdf_fn, jnp.asarray(pts, dtype=dtype)), dtype=np.float64)
         if vals.size != coords.shape[0] * coords.shape[1]:
             raise ValueError(
                 f"`pdf_fn` must return one density per point: got shape {vals.shape} for "
                 f"{coords.shape[0] * coords.shape[1]} points."
             )
         vals = np.where(np.isfinite(vals), vals, np.nan).reshape(coords.shape[:2])
-        out[s : s + chunk] = vals.mean(axis=1) * np.prod(width)
+        out[s : s + m] = vals[:m].mean(axis=1) * np.prod(width)
     return out
 
 
@@ -246,9 +269,9 @@ def chi2_test(
     dtype = jnp.result_type(float)
     if u_dim is not None:
         u_dim = check_positive_int(u_dim, "u_dim")
-        samples = sample_fn(jax.random.uniform(key, (n, u_dim), dtype=dtype))
+        samples = _call(sample_fn, jax.random.uniform(key, (n, u_dim), dtype=dtype))
     else:
-        samples = sample_fn(key)
+        samples = _call(sample_fn, key)
     samples = np.asarray(samples, dtype=np.float64)
     coords, valid = _to_coords(domain, samples, n)
 

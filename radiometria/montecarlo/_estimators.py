@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from .._checks import as_float_array, check_choice, check_positive_int
+from .._checks import as_float_array, check_choice, check_positive_int, check_unit_interval
 from .._types import Key
 from ._heuristics import mis_weights
 
@@ -104,7 +104,7 @@ def _variates(n: int | None, dim: int, key: Key | None, u) -> Array:
         u = as_float_array(u, "u")
         if u.ndim != 2 or u.shape[1] != dim:
             raise ValueError(f"`u` must have shape (n, {dim}), got {u.shape}.")
-        return u
+        return check_unit_interval(u)
     if key is None:
         raise ValueError("A `key` (or explicit variates `u`) is required.")
     return jax.random.uniform(key, (check_positive_int(n, "n"), dim))
@@ -357,7 +357,9 @@ def control_variate(values, control_values, control_mean, *, beta=None) -> Estim
     return Estimate(mean, var, n)
 
 
-def antithetic(f: Callable, n: int, *, u_dim: int, key: Key | None = None, u=None) -> Estimate:
+def antithetic(
+    f: Callable, n: int | None, *, u_dim: int, key: Key | None = None, u=None
+) -> Estimate:
     r"""Antithetic-variates estimate of $\int_{[0,1)^d} f$: pairs $(u, 1-u)$ averaged.
 
     **Arguments:**

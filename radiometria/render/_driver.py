@@ -120,8 +120,9 @@ class _Kernel(eqx.Module):
 class _Config:
     """The static configuration of a render: it fixes the compiled step."""
 
-    plan: _Plan
-    spp: int
+    n_pixels: int
+    tile: int  # pixels per step
+    passes: int  # samples per pixel per step
     width: int
     max_depth: int
     rr_depth: int
@@ -130,18 +131,18 @@ class _Config:
     devices: tuple
 
 
-def _trace(kernel: _Kernel, key, pass_start, pixel, *, cfg: _Config):
+def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     """Trace the step's paths of (a device's share of) a tile of pixels.
 
     Returns `(raster_xy (n, 2), xyz (n, 3), weight (n,))` for the `n = t k` samples, pixel-major
     (the `k` passes of a pixel are consecutive); invalid samples have weight 0 and XYZ 0.
     """
     dtype = jnp.float32
-    t, k = pixel.shape[0], cfg.plan.passes
-    valid_pixel = pixel < cfg.plan.n_pixels
+    t, k = pixel.shape[0], cfg.passes
+    valid_pixel = pixel < cfg.n_pixels
     pix = jnp.repeat(jnp.where(valid_pixel, pixel, 0), k)  # (n,): pixel-major
     passes = jnp.tile(pass_start + jnp.arange(k, dtype=jnp.int32), t)
-    sample = functools.partial(sample_block, key, cfg.sampler, spp=cfg.spp, dtype=dtype)
+    sample = functools.partial(sample_block, key, cfg.sampler, spp=spp, dtype=dtype)
     u = sample(pix, passes, 0, CAMERA_DIMENSIONS)
 
     def bounce_samples(b, paths):
@@ -170,7 +171,7 @@ def _trace(kernel: _Kernel, key, pass_start, pixel, *, cfg: _Config):
         rr_depth=cfg.rr_depth,
     )
     xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
-    ok = jnp.repeat(valid_pixel, k) & (passes < cfg.spp)
+    ok = jnp.repeat(valid_pixel, k) & (passes < spp)
     ok = ok & jnp.all(jnp.isfinite(xyz), axis=-1)
     return raster, jnp.where(ok[:, None], xyz, 0.0), jnp.where(ok, weight.astype(dtype), 0.0)
 
@@ -282,9 +283,20 @@ def render(
         )
     plan = _plan(n_pixels, spp, batch, len(devices))
     kernel = _Kernel(scene, camera, rfilter, Film(1, 1, dtype=jnp.float32))
-    cfg = _Config(plan, spp, width, max_depth, rr_depth, sampler, reconstruction, tuple(devices))
+    cfg = _Config(
+        n_pixels,
+        plan.tile,
+        plan.passes,
+        width,
+        max_depth,
+        rr_depth,
+        sampler,
+        reconstruction,
+        tuple(devices),
+    )
     step = _compiled_step(cfg)
     key = jax.random.key(int(seed))
+    spp_arr = jnp.int32(spp)
     film = Film(width, height, dtype=jnp.float32)
 
     # Multi-host: process i of m takes steps i, i + m, ...; the films are summed at the end.
@@ -294,7 +306,7 @@ def render(
     for i in steps:
         group, tile = divmod(i, plan.n_tiles)
         pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
-        film = step(film, kernel, key, jnp.int32(group * plan.passes), pixel)
+        film = step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel)
         if bar is not None:
             bar.update(plan.tile * plan.passes)
     if bar is not None:
@@ -361,7 +373,7 @@ _STEP_CACHE: dict = {}
 
 
 def _compiled_step(cfg: _Config):
-    """The jitted step `(film, kernel, key, pass_start, pixel) -> film` for `cfg` (cached).
+    """The jitted step `(film, kernel, key, spp, pass_start, pixel) -> film` for `cfg` (cached).
 
     The paths are traced under `jax.shard_map` over a 1-D mesh of `cfg.devices`, each device
     taking its share of the tile's pixels; their results are then added to the film (replicated
@@ -377,20 +389,20 @@ def _compiled_step(cfg: _Config):
     trace = jax.shard_map(
         functools.partial(_trace, cfg=cfg),
         mesh=mesh,
-        in_specs=(P(), P(), P(), P("pixels")),
+        in_specs=(P(), P(), P(), P(), P("pixels")),
         out_specs=P("pixels"),
         check_vma=False,
     )
 
     @functools.partial(jax.jit, donate_argnums=0)
-    def step(film, kernel, key, pass_start, pixel):
-        raster, xyz, weight = trace(kernel, key, pass_start, pixel)
+    def step(film, kernel, key, spp, pass_start, pixel):
+        raster, xyz, weight = trace(kernel, key, spp, pass_start, pixel)
         if cfg.reconstruction == "splat":
             return splat_samples(film, raster, xyz, kernel.rfilter, weight)
         # One entry per pixel (its k samples summed first), so the scatter has no duplicate
         # indices and its result does not depend on the order of additions; indices past the
         # image are dropped.
-        k = cfg.plan.passes
+        k = cfg.passes
         xyz_sum = jnp.sum((xyz * weight[:, None]).reshape(-1, k, 3), axis=1)
         w_sum = jnp.sum(weight.reshape(-1, k), axis=1)
         xyz_acc = film.xyz_sum.reshape(-1, 3).at[pixel].add(xyz_sum, mode="drop")

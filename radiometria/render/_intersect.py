@@ -7,8 +7,9 @@ identical arithmetic, and each edge function is evaluated with its two corners i
 canonical order (`_edge`), so a shared edge gives exactly opposite values in the two
 triangles even where XLA:CPU contracts `a * b - c * d` into a fused multiply-add. A ray
 through an edge or a vertex thus hits at least one of the triangles: no ray leaks through a
-closed mesh. Edge values that are exactly 0 count as inside (a tie hits both triangles). The paper's double-precision fallback for `U = V = W = 0` products is omitted: it
-refines which of two tied triangles is reported and is not needed for watertightness.
+closed mesh. Edge values that are exactly 0 count as inside (a tie hits both triangles).
+The paper's double-precision fallback for `U = V = W = 0` products is omitted: it refines
+which of two tied triangles is reported and is not needed for watertightness.
 
 Ray-box tests follow the robust slab test of Ize (2013): the far distance is enlarged by
 `1 + 2 gamma_3` so rounding never culls a box that a ray grazes.
@@ -268,17 +269,25 @@ def intersect_brute_force_closest(
 def _brute_closest(tri, o, d, tmin, tmax):
     ray = _expand(_setup_rays(o, d))
     v0, v1, v2 = _columns(tri[None])  # (1, f) against the rays' (n, 1)
-    hit, t, _, _ = _triangle_test(ray, v0, v1, v2, tmin[:, None], tmax[:, None])
-    t = jnp.where(hit, t, jnp.inf)
-    best = jnp.argmin(t, axis=1).astype(jnp.int32)
-    any_hit = jnp.any(hit, axis=1)
+
+    def t_all():
+        hit, t, _, _ = _triangle_test(ray, v0, v1, v2, tmin[:, None], tmax[:, None])
+        return jnp.where(hit, t, jnp.inf)
+
+    # Two fused reductions instead of a variadic argmin (which XLA:CPU does not fuse with its
+    # producer, so the (n, f) matrix of t would be written out): the nearest t, then the lowest
+    # index that attains it. Each pass recomputes the tests in registers.
+    t_best = jnp.min(t_all(), axis=1)
+    iota = jnp.arange(tri.shape[0], dtype=jnp.int32)[None, :]
+    best = jnp.min(jnp.where(t_all() == t_best[:, None], iota, tri.shape[0]), axis=1)
+    any_hit = t_best < jnp.inf
+    best = jnp.where(any_hit, best, 0)
     # recompute the chosen triangle per ray for its barycentrics (no (n, f) temporaries)
-    b = tri[best]
-    w0, w1, w2 = _columns(b)
-    _, t1, b1, b2 = _triangle_test(_setup_rays(o, d), w0, w1, w2, tmin, tmax)
-    zero = jnp.zeros_like(t1)
+    w0, w1, w2 = _columns(tri[best])
+    _, _, b1, b2 = _triangle_test(_setup_rays(o, d), w0, w1, w2, tmin, tmax)
+    zero = jnp.zeros_like(b1)
     return Hit(
-        t=jnp.where(any_hit, t1, jnp.inf),
+        t=t_best,
         prim=jnp.where(any_hit, best, -1),
         b1=jnp.where(any_hit, b1, zero),
         b2=jnp.where(any_hit, b2, zero),

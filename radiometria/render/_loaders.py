@@ -566,7 +566,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
 
     **Arguments:**
 
-    - `path`: the `.xml` file; relative mesh file names are relative to its folder.
+    - `path`: the `.xml` file; relative mesh file names are relative to its folder. [path]
     - `params`: values for `$name` substitutions; they override the file's `<default>` tags.
 
     **Returns:**

@@ -57,7 +57,7 @@ def _sobol_2d(index):
 
 
 def sample_block(
-    key, sampler: str, pixel, pass_index, first_dim, n_dims: int, *, spp: int = 1, dtype=jnp.float32
+    key, sampler: str, pixel, pass_index, first_dim, n_dims: int, *, spp=1, dtype=jnp.float32
 ):
     """Variates `first_dim .. first_dim + n_dims - 1` of sample `pass_index` of pixel `pixel`.
 
@@ -69,7 +69,8 @@ def sample_block(
         `y * width + x` and sample indices within the pixel.
     - `first_dim`: the first dimension, a multiple of 4 (may be traced).
     - `n_dims`: how many dimensions, a multiple of 4 (static).
-    - `spp`: samples per pixel of the whole render (static; Sobol permutes indices within it).
+    - `spp`: samples per pixel of the whole render (may be traced; Sobol permutes the sample
+        indices within it).
 
     **Returns:**
 
@@ -97,7 +98,7 @@ def sample_block(
         )
         h = _mix32(_mix32(_mix32(p ^ salt[0]) ^ m) + salt[1])  # (..., pairs)
         s = jnp.broadcast_to(s, h.shape)
-        pts = _sobol_2d(permutation_element(s, np.uint32(spp), h))  # (..., pairs, 2)
+        pts = _sobol_2d(permutation_element(s, jnp.asarray(spp).astype(_U32), h))  # (..., pairs, 2)
         ux = owen_scramble_32(pts[..., 0], _mix32(h ^ np.uint32(0x68E31DA4)))
         uy = owen_scramble_32(pts[..., 1], _mix32(h ^ np.uint32(0xB5297A4D)))
         u = jnp.stack([ux, uy], axis=-1).reshape(pixel.shape + (n_dims,))

@@ -70,6 +70,9 @@ class SceneError(ValueError):
     """A scene file or scene description is invalid; the message names the file and the line
     or field (thesis ch. 8: scene input)."""
 
+    def __init__(self, message: str):
+        super().__init__(message)
+
 
 @dataclasses.dataclass(frozen=True)
 class Material:
@@ -687,6 +690,7 @@ def load_scene(name_or_path, *, params: dict | None = None) -> SceneDescription:
     - `name_or_path`: `"cornell-box"` or `"cornell-box-measured"` (built-ins, see the module
         docstring of `radiometria.render._scene`), or a path to a `.json` scene (the schema of
         the built-in files) or a Mitsuba 3 `.xml` scene (the subset of `load_mitsuba_xml`).
+        [name or path]
     - `params`: for `.xml` files, values for `$name` substitutions (override `<default>`).
 
     **Returns:**

@@ -23,13 +23,18 @@ counts as `n_lambda = 1` and broadcasts against any wavelength count downstream.
 (`alpha`) and Oren-Nayar's `sigma` are not spectral, shape `(...)`.
 
 **Dispersion.** A dielectric whose `eta` varies across the wavelengths refracts each wavelength
-into a different direction. `f` and `pdf` are exact per wavelength; `sample_f` chooses the
-direction with the first ("hero") wavelength, `eta[..., 0]`, and reports the hero's pdf.
+into a different direction. With `dispersion=True`, `f` is exact per wavelength (the half
+vector is recomputed for each wavelength's `eta`); `pdf` and `sample_f` use the first ("hero")
+wavelength, `eta[..., 0]`, to choose the direction and report the hero's pdf.
 Reflection serves every wavelength (its direction does not depend on `eta`); for a
 *transmission* sample the secondary wavelengths get `f = 0` and `terminate_secondary = True`, as
 pbrt does (`SampledWavelengths::TerminateSecondary`): from then on the path carries the hero
 wavelength only, and the renderer must reweight it (pbrt divides the hero's wavelength pdf by
-`n_lambda`). A constant `eta` (the common case) never terminates.
+`n_lambda`). A constant `eta` (the common case) never terminates. The static flag
+`dispersion` is detected at construction from a concrete `eta` (any variation along the last
+axis); a traced `eta` (a BxDF built inside `jit`) counts as dispersive unless the caller passes
+`dispersion=False`, which promises a constant `eta` and evaluates everything once with
+`eta[..., 0]` (about n_lambda times less work).
 
 **Sidedness.** As in pbrt, the reflective BxDFs here are symmetric: they reflect in whichever
 hemisphere `wo` lies. `TwoSidedBxDF(front, back)` gives the two sides different BxDFs, each
@@ -52,7 +57,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
-from ._directions import _safe_sqrt
+from ._directions import _barrier, _safe_sqrt
 from ._fresnel import _amplitudes, _check_eta, _check_k, _fr_conductor, _fr_dielectric
 from ._microfacet import TrowbridgeReitzDistribution
 from ._warps import _sample_disk_concentric
@@ -144,16 +149,6 @@ def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array
 def _mirror_xy(w: Array) -> Array:
     """Mirror reflection about +z: (-x, -y, z) (thesis eq. 3.8 in the local frame)."""
     return jnp.concatenate([-w[..., :2], w[..., 2:]], axis=-1)
-
-
-def _barrier(*xs):
-    """Materialise per-sample intermediates (`jax.lax.optimization_barrier`).
-
-    Without it XLA's fusion recomputes a shared producer inside every consumer: once per output
-    of a `BSDFSample` and once per wavelength of a spectral result (measured: 4-5x slower on
-    CPU). Differentiable and batchable like the identity.
-    """
-    return jax.lax.optimization_barrier(xs)
 
 
 def _detect_dispersion(eta: Array, dispersion: bool | None) -> bool:
@@ -523,6 +518,7 @@ class DielectricBxDF(AbstractBxDF):
 
     - `eta`: relative index of refraction $\eta_t/\eta_i$ of the inside over the outside
         (the side the normal points to), > 0, `(..., n_lambda)`. [dimensionless]
+    - `dispersion`: static; whether `eta` varies with wavelength (see the module notes).
 
     !!! note "Thesis"
         Section 3.1.1, eq. (3.7)-(3.18).
@@ -728,6 +724,7 @@ class RoughDielectricBxDF(AbstractBxDF):
     - `alpha_x`, `alpha_y`: GGX roughness in (0, 1], `(...)`. [dimensionless]
     - `eta`: relative index of refraction inside/outside, > 0, `(..., n_lambda)`. [dimensionless]
     - `masking`: `"height_correlated"` (default) or `"separable"` (Mitsuba 3).
+    - `dispersion`: static; whether `eta` varies with wavelength (see the module notes).
 
     !!! note "Thesis"
         Section 3.1 (glossy reflection and transmission), 3.1.1.

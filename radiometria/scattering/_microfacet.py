@@ -40,6 +40,11 @@ def roughness_to_alpha(roughness) -> Array:
     return _safe_sqrt(r)
 
 
+def _unit(v: Array) -> Array:
+    """v / |v| along the last axis (v != 0), with the norm as a reduction."""
+    return v / jnp.sqrt(jnp.sum(v * v, axis=-1, keepdims=True))
+
+
 def _check_alpha(alpha, name: str) -> Array:
     alpha = as_float_array(alpha, name)
     return eqx.error_if(
@@ -168,34 +173,29 @@ class TrowbridgeReitzDistribution(eqx.Module):
         x, y, z, ax, ay = self._axy(w)
         u0, u1 = u[..., 0], u[..., 1]
         x, y, z, ax, ay, u0, u1 = jnp.broadcast_arrays(*_align(x, y, z, ax, ay, u0, u1))
-        # Transform w to the hemispherical configuration (alpha = 1).
-        hx, hy, hz = ax * x, ay * y, z
-        inv = 1.0 / jnp.sqrt(hx * hx + hy * hy + hz * hz)
-        hx, hy, hz = hx * inv, hy * inv, hz * inv
-        flip = hz < 0
-        hx, hy, hz = jnp.where(flip, -hx, hx), jnp.where(flip, -hy, hy), jnp.abs(hz)
+        # Vectors are kept stacked (..., 3) and normalised with reductions over the last axis:
+        # a reduction ends an XLA fusion, so the stages below are computed once per sample
+        # instead of once per vector component (see `_barrier`).
+        # Transform w to the hemispherical configuration (alpha = 1), upper hemisphere.
+        wh = _unit(jnp.stack([ax * x, ay * y, z], axis=-1))
+        wh = jnp.where(wh[..., 2:3] < 0, -wh, wh)
         # Orthonormal basis (T1, T2, wh); T1 = normalize(z x wh) away from the pole.
-        rho2 = hx * hx + hy * hy
+        zero = jnp.zeros_like(x)
+        t1 = jnp.stack([-wh[..., 1], wh[..., 0], zero], axis=-1)
+        rho2 = jnp.sum(t1 * t1, axis=-1, keepdims=True)
         pole = rho2 < 1e-14
-        inv_rho = 1.0 / jnp.sqrt(jnp.where(pole, 1.0, rho2))
-        t1x = jnp.where(pole, 1.0, -hy * inv_rho)
-        t1y = jnp.where(pole, 0.0, hx * inv_rho)
-        # T2 = wh x T1 (T1 has no z component)
-        t2x = -hz * t1y
-        t2y = hz * t1x
-        t2z = hx * t1y - hy * t1x
+        ex = jnp.stack([jnp.ones_like(x), zero, zero], axis=-1)
+        t1 = jnp.where(pole, ex, t1 / jnp.sqrt(jnp.where(pole, 1.0, rho2)))
+        t2 = jnp.cross(wh, t1)
         # Uniformly distributed point on the unit disk (concentric mapping, as Mitsuba; pbrt
         # uses the polar one: any uniform disk sample gives the same distribution).
         px, py = _sample_disk_concentric(u0, u1)
         # Warp the disk to the projection of the visible hemisphere.
         h = _safe_sqrt(1.0 - px * px)
-        s = 0.5 * (1.0 + hz)
+        s = 0.5 * (1.0 + wh[..., 2])
         py = (1.0 - s) * h + s * py
         pz = _safe_sqrt(1.0 - px * px - py * py)
-        nx = px * t1x + py * t2x + pz * hx
-        ny = px * t1y + py * t2y + pz * hy
-        nz = py * t2z + pz * hz
+        nh = px[..., None] * t1 + py[..., None] * t2 + pz[..., None] * wh
         # Back to the ellipsoid configuration.
-        mx, my, mz = ax * nx, ay * ny, jnp.maximum(1e-6, nz)
-        inv = 1.0 / jnp.sqrt(mx * mx + my * my + mz * mz)
-        return jnp.stack([mx * inv, my * inv, mz * inv], axis=-1)
+        m = jnp.stack([ax * nh[..., 0], ay * nh[..., 1], jnp.maximum(1e-6, nh[..., 2])], axis=-1)
+        return _unit(m)

@@ -334,7 +334,7 @@ def fit_rgb(
         Eq. 2.25-2.27, section 2.2.3; Gauss-Newton, appendix C.1.
 
     ??? cite "References"
-        `Jakob2019` section 4; `Pharr2023` section 4.6.6; `Rader2023` (optimistix).
+        `Jakob2019` section 4; `Pharr2023` section 4.6.6; `Rader2024` (optimistix).
     """
     rgb = check_last_axis(as_float_array(rgb, "rgb"), "rgb", 3)
     _check_rgb_values(rgb)

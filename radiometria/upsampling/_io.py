@@ -19,7 +19,7 @@ pbrt-v4's `RGBToSpectrumTable` layout (nm coefficients, float32 unless fitted in
   `rgb_to_xyz[9]` (row-major) and `xyz_whitepoint[3]`. Its `rgb2spec_load()` refuses a file
   without the block.
 
-What current Mitsuba reads was established three ways (see `docs/refs` and the module tests):
+What current Mitsuba reads was established three ways (`Mitsuba2026`; `tests/upsampling`):
 the `data/srgb.coeff` that the installed Mitsuba 3.9.1 wheel ships is 9 442 108 bytes, 4 660
 more than the 2019 layout for res 64, and the extra bytes parse exactly as the block above
 (nfine = 288 = 283 Simpson nodes padded to a multiple of 16; the weights of each channel sum to
@@ -119,7 +119,8 @@ def save_lut(lut: RGBToSpectrumLUT, path, *, fit_settings: dict | None = None) -
         Section 2.2.3 (the precomputed 5-D lookup table).
 
     ??? cite "References"
-        `Jakob2019` (rgb2spec); `Pharr2023` section 4.6.6.
+        `Jakob2019` (rgb2spec); `Mitsuba2026` (the current `.coeff` layout); `Pharr2023`
+        section 4.6.6.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -228,7 +229,7 @@ def load_lut(path, *, with_info: bool = False):
         Section 2.2.3 (the precomputed 5-D lookup table).
 
     ??? cite "References"
-        `Jakob2019` (rgb2spec); `Pharr2023` section 4.6.6.
+        `Jakob2019` (rgb2spec 2019); `Mitsuba2026` (rgb2spec 2026); `Pharr2023` section 4.6.6.
     """
     path = Path(path)
     if not path.is_file():

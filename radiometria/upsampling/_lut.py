@@ -313,68 +313,102 @@ class _Schedule(eqx.Module):
     n_first: Array  # LM steps (at most) for the cold start at k0
     n_steps: Array  # LM steps (at most) per brightness step
     min_steps: Array  # LM steps (at least) per brightness step
+    n_sub: Array  # LM steps (at most) at an intermediate brightness level
     tolerance: Array  # Delta E*ab at which a step may end
     allowed_fraction: Array  # fraction of a block's columns that may miss it
 
     @staticmethod
-    def make(n_first, n_steps, min_steps, tolerance, allowed_fraction, dtype) -> "_Schedule":
+    def make(n_first, n_steps, min_steps, n_sub, tolerance, allowed_fraction, dtype):
         i32 = lambda v: jnp.asarray(v, jnp.int32)  # noqa: E731
         return _Schedule(
-            i32(n_first), i32(n_steps), i32(min_steps), jnp.asarray(tolerance, dtype),
-            jnp.asarray(allowed_fraction, dtype),
+            i32(n_first), i32(n_steps), i32(min_steps), i32(n_sub),
+            jnp.asarray(tolerance, dtype), jnp.asarray(allowed_fraction, dtype),
         )  # fmt: skip
 
 
-def _sweep_plan(res: int, k0: int) -> tuple[np.ndarray, np.ndarray]:
-    """Brightness indices in solve order, and where each starts from.
+def _sweep_plan(scale: np.ndarray, k0: int, max_ratio: float = 2.0, max_step: float = 0.1):
+    """The brightness path of the sweep: values, starts, and which steps are table nodes.
 
-    Order: k0 (cold, from c = 0), k0+1 .. res-1 (each from the previous), then k0-1 .. 1 (the
-    first from k0's solution, then each from the previous). `start[t]`: 0 = cold, 1 = previous
-    step, 2 = the solution at k0.
+    Order: node k0 (cold, from c = 0), up through k0+1 .. res-1, then down from k0's solution
+    through k0-1 .. 1, as pbrt's `rgb2spec_opt`. Where two consecutive nodes are far apart
+    (brightness ratio above `max_ratio` or difference above `max_step`, e.g. next to black,
+    or everywhere in a coarse table), intermediate brightness levels are inserted
+    (geometrically spaced) so each continuation step stays small; without them the warm start
+    can fall into a wrong local minimum of eq. 2.27.
+
+    Returns `(z, start, node)` of length T: brightness per step, the start of each step
+    (0 = cold, 1 = previous step, 2 = the solution at k0) and the table row it fills (-1 for
+    an intermediate level).
     """
-    order = [k0] + list(range(k0 + 1, res)) + list(range(k0 - 1, 0, -1))
-    start = [0] + [1] * (res - 1 - k0) + ([2] + [1] * (k0 - 2) if k0 > 1 else [])
-    return np.asarray(order, np.int32), np.asarray(start, np.int32)
+    res = scale.shape[0]
+    z, start, node = [scale[k0]], [0], [k0]
+
+    def walk(ks, first_start):
+        prev = scale[k0]
+        for i, k in enumerate(ks):
+            target = scale[k]
+            ratio = max(target / prev, prev / target)
+            m = max(1, int(np.ceil(np.log(ratio) / np.log(max_ratio))))
+            m = max(m, int(np.ceil(abs(target - prev) / max_step)))
+            levels = np.geomspace(prev, target, m + 1)[1:]
+            for j, zz in enumerate(levels):
+                z.append(float(zz) if j < m - 1 else float(target))
+                start.append(first_start if (i == 0 and j == 0) else 1)
+                node.append(k if j == m - 1 else -1)
+            prev = target
+
+    walk(list(range(k0 + 1, res)), 1)
+    walk(list(range(k0 - 1, 0, -1)), 2)
+    return np.asarray(z), np.asarray(start, np.int32), np.asarray(node, np.int32)
 
 
 def _fit_columns(e, scale, k0, m, schedule: _Schedule):
     """Coefficients (res, n, 3), residuals (res, n) and LM iterations (res,) for one block of
     columns with directions e (n, 3).
 
-    One `lax.scan` over the brightness nodes in `_sweep_plan` order: a single compiled
-    Gauss-Newton loop whose iteration count adapts to the block (a step ends once all but
-    `allowed_fraction` of the block's columns reach the tolerance). Row 0 (black) is a
-    placeholder that the caller sets.
+    One `lax.scan` along the `_sweep_plan` path: a single compiled Gauss-Newton loop whose
+    iteration count adapts to the block (a step ends once all but `allowed_fraction` of the
+    block's columns reach the tolerance). Row 0 (black) is a placeholder that the caller sets.
     """
-    res = scale.shape[0]
+    scale_np = np.asarray(scale, np.float64)
+    res = scale_np.shape[0]
     n = e.shape[0]
     dtype = e.dtype
-    order, start = _sweep_plan(res, k0)
+    zs, start, node = _sweep_plan(scale_np, k0)
 
     def step(carry, xs):
         c_prev, c_k0 = carry
-        k, how = xs
+        z, how, is_node = xs
         c_start = jnp.where(how == 0, 0.0, jnp.where(how == 1, c_prev, c_k0)).astype(dtype)
-        lab_t = target_Lab(e * scale[k], m)
+        lab_t = target_Lab(e * z, m)
+        limit = jnp.where(how == 0, schedule.n_first, schedule.n_steps)
         n_it, s = lm_solve(
             lm_init(c_start, lab_t, m),
             lab_t,
             m,
-            jnp.where(how == 0, schedule.n_first, schedule.n_steps),
+            jnp.where(is_node, limit, schedule.n_sub),
             schedule.tolerance,
-            min_steps=schedule.min_steps,
+            min_steps=jnp.where(is_node, schedule.min_steps, 1),
             allowed_fraction=schedule.allowed_fraction,
         )
         c_k0 = jnp.where(how == 0, s.c, c_k0)
         return (s.c, c_k0), (s.c, jnp.sqrt(s.cost), n_it)
 
     zeros = jnp.zeros((n, 3), dtype)
-    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), (jnp.asarray(order), jnp.asarray(start)))
-    # Back to brightness order; row 0 = copy of row 1 (placeholder).
-    inv = np.argsort(order)
-    coeffs = jnp.concatenate([cs[inv][:1], cs[inv]], axis=0)
-    resid = jnp.concatenate([jnp.zeros_like(rs[:1]), rs[inv]], axis=0)
-    iterations = jnp.concatenate([jnp.zeros_like(its[:1]), its[inv]], axis=0)
+    xs = (jnp.asarray(zs, dtype), jnp.asarray(start), jnp.asarray(node >= 0))
+    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), xs)
+    # The node rows, in brightness order 1 .. res-1; row 0 = copy of row 1 (placeholder).
+    rows = np.full(res, -1)
+    rows[node[node >= 0]] = np.flatnonzero(node >= 0)
+    rows = rows[1:]
+    coeffs = jnp.concatenate([cs[rows[:1]], cs[rows]], axis=0)
+    resid = jnp.concatenate([jnp.zeros_like(rs[:1]), rs[rows]], axis=0)
+    it_rows = np.zeros((res, zs.shape[0]))
+    next_node = 0
+    for t in range(zs.shape[0] - 1, -1, -1):  # intermediate levels count to the next node
+        next_node = node[t] if node[t] >= 0 else next_node
+        it_rows[next_node, t] = 1.0
+    iterations = jnp.asarray(it_rows, dtype) @ its.astype(dtype)
     return coeffs, resid, iterations
 
 
@@ -467,6 +501,7 @@ def fit_lut(
     n_first: int = 60,
     n_steps: int = 12,
     min_steps: int = 2,
+    n_sub: int = 3,
     allowed_fraction: float = 2e-3,
     retry_steps: int = 60,
     repair_steps: int = 60,
@@ -501,7 +536,8 @@ def fit_lut(
     - `tolerance`: per-entry convergence criterion on $\Delta E^*_{ab}$ (the float32 floor
         is about 2e-3 next to white). [-]
     - `n_first`, `n_steps`, `min_steps`, `allowed_fraction`, `retry_steps`, `repair_steps`,
-        `repair_rounds`: iteration limits of the stages above.
+        `repair_rounds`: iteration limits of the stages above; `n_sub`: iterations at the
+        intermediate brightness levels the sweep inserts between distant nodes.
     - `chunk`: table columns per vectorised block (cache blocking); `blocks_per_call`:
         blocks per device per compiled call (the granularity of `progress`).
     - `step_nm`: quadrature step of the forward model (1 nm default). [nm]
@@ -517,7 +553,8 @@ def fit_lut(
         Eq. 2.25-2.27 and the lookup table of section 2.2.3; Gauss-Newton, appendix C.1.
 
     ??? cite "References"
-        `Jakob2019` section 5; `Pharr2023` section 4.6.6 (`rgb2spec_opt`).
+        `Jakob2019` section 5; `Pharr2023` section 4.6.6 (`rgb2spec_opt`); `Levenberg1944`,
+        `Marquardt1963` (damping); `Bjorck1967` (the least-squares step by Gram-Schmidt).
     """
     t_start = time.perf_counter()
     res = check_positive_int(resolution, "resolution", minimum=2)
@@ -552,7 +589,7 @@ def fit_lut(
         idx = np.resize(cols, n_calls * per_call) if cols.size else cols
         out_c = np.empty((res, n_calls * per_call, 3), dtype)
         out_r = np.empty((res, n_calls * per_call), dtype)
-        its = np.zeros(res, np.int64)
+        its = np.zeros(res, np.float64)
         for i in range(n_calls):
             sl = slice(i * per_call, (i + 1) * per_call)
             e = jnp.asarray(e_np[idx[sl]], dtype)
@@ -566,7 +603,7 @@ def fit_lut(
         return out_c[:, : cols.size], out_r[:, : cols.size], its
 
     # (1) The sweep.
-    sched = _Schedule.make(n_first, n_steps, min_steps, sweep_tol, allowed_fraction, dtype)
+    sched = _Schedule.make(n_first, n_steps, min_steps, n_sub, sweep_tol, allowed_fraction, dtype)
     coeffs, resid, iterations = run(np.arange(n_cols), sched, "sweep")
     # Explicit entries: greys (closed form), white (finite), black row (copy of row 1, later).
     exact = np.zeros((res, n_cols), dtype=bool)
@@ -588,7 +625,9 @@ def fit_lut(
     bad_cols = np.flatnonzero((bad & ~stationary).any(axis=0))
     n_retried = int(bad_cols.size)
     if bad_cols.size:
-        sched2 = _Schedule.make(2 * n_first, retry_steps, min_steps, sweep_tol, 0.0, dtype)
+        sched2 = _Schedule.make(
+            2 * n_first, retry_steps, min_steps, retry_steps, sweep_tol, 0.0, dtype
+        )
         c2, r2, it2 = run(bad_cols, sched2, "retry")
         iterations += it2
         better = (r2 < resid[:, bad_cols]) & ~exact[:, bad_cols]
@@ -628,6 +667,7 @@ def fit_lut(
         "n_first": n_first,
         "n_steps": n_steps,
         "min_steps": min_steps,
+        "n_sub": n_sub,
         "allowed_fraction": allowed_fraction,
         "retry_steps": retry_steps,
         "repair_steps": repair_steps,

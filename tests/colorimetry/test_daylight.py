@@ -49,7 +49,9 @@ def test_daylight_spd_batch_interpolation_and_grad():
     np.testing.assert_allclose(S[0, 1, 2], 0.6 * S5[0] + 0.4 * S5[1], rtol=1e-13)
     np.testing.assert_allclose(jax.jit(rc.daylight_spd)(T, wl), S, rtol=1e-14)
     check_grads(
-        lambda t: rc.daylight_spd(t, wl[::40], rounding=False), (jnp.array(6000.0),), order=1
+        jax.jit(lambda t: rc.daylight_spd(t, wl[::40], rounding=False)),
+        (jnp.array(6000.0),),
+        order=1,
     )
 
 

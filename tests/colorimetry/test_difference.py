@@ -109,7 +109,7 @@ def test_delta_E_grads_finite_and_match_finite_differences():
     a = jnp.array([52.0, 20.0, -31.0])
     b = jnp.array([48.0, 23.0, -27.0])
     for f in (rc.delta_E_CIE1976, rc.delta_E_CIE1994, rc.delta_E_CIE2000):
-        check_grads(f, (a, b), order=1, modes=["fwd", "rev"])
+        check_grads(jax.jit(f), (a, b), order=1, modes=["fwd", "rev"])
         # Identical colours and neutral colours: finite (zero) gradients, no NaN.
         g = jax.grad(f)(a, a)
         assert np.all(np.isfinite(g))

@@ -85,6 +85,8 @@ def test_importance_sampling_accepts_qmc_variates():
             u=u,
             key=jax.random.key(0),
         )
+    with pytest.raises(eqx.EquinoxRuntimeError, match="u"):
+        mc.antithetic(lambda u: u[:, 0], None, u_dim=1, u=jnp.full((4, 1), 1.5))
     with pytest.raises(ValueError, match="shape"):
         mc.importance_sampling(
             radiance_integrand, mc.sample_cosine_hemisphere, mc.uniform_hemisphere_pdf, u_dim=3, u=u

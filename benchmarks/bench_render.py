@@ -1,0 +1,178 @@
+"""Time to equal error on the Cornell box: radiometria's spectral path tracer against Mitsuba 3.
+
+Same machine, same run: the Cornell box (Mitsuba 3's `cornell_box()`, radiometria's
+`cornell-box`) at 256 x 256 px, spectral, `max_depth` 8, Gaussian film. One high-spp Mitsuba
+`scalar_spectral` image is the reference (cached in `--cache`). Each renderer then renders
+spp = 4, 8, ..., 64 with fresh seeds; for each image the wall time (after a warm-up render that
+compiles) and the relative MSE against the reference,
+`mean((x - ref)^2 / (ref^2 + 0.01))`, are recorded. Log-log interpolation gives each
+renderer's time to reach a common error (by default Mitsuba `scalar_spectral`'s error at
+16 spp); the ratios are printed and written as JSON.
+
+Renderers: radiometria with the independent and the (padded Owen-scrambled) Sobol sampler,
+Mitsuba 3 `scalar_spectral`, and Mitsuba 3 `llvm_ad_spectral` when libLLVM is found
+(`apt-get install -y libllvm19`; set `DRJIT_LIBLLVM_PATH`). Every renderer uses all cores:
+XLA is given one CPU device per core (`--xla_force_host_platform_device_count`, set before JAX
+is imported) and radiometria shards the pixels over them; Mitsuba uses its thread pool.
+
+    .venv/bin/python benchmarks/bench_render.py [--size 256] [--ref-spp 1024] [--quick]
+
+The script also renders the scene from a Mitsuba XML file with both renderers (helper G's
+loader) and prints the per-channel means.
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+if "jax" not in sys.modules:  # one XLA CPU device per core, so the render is sharded over them
+    os.environ.setdefault(
+        "XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}"
+    )
+sys.path.insert(0, str(ROOT))
+
+import numpy as np
+
+from tests.render._mitsuba import cornell_box_xml, cornell_dict, rel_mse, render_mitsuba
+
+LLVM_CANDIDATES = ("/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/llvm-19/lib/libLLVM.so")
+
+
+def _timed(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0
+
+
+def _time_at_error(times, errors, target):
+    """Log-log interpolation (or extrapolation from the two nearest points) of time vs error."""
+    le, lt = np.log(np.asarray(errors)), np.log(np.asarray(times))
+    order = np.argsort(le)
+    le, lt = le[order], lt[order]
+    x = np.log(target)
+    i = int(np.clip(np.searchsorted(le, x), 1, len(le) - 1))
+    slope = (lt[i] - lt[i - 1]) / (le[i] - le[i - 1])
+    return float(np.exp(lt[i - 1] + slope * (x - le[i - 1])))
+
+
+def _ours(size, sampler):
+    from radiometria.render import load_scene, render
+    from radiometria.render._render_scene import compile_scene
+
+    scene, camera, rfilter = compile_scene(load_scene("cornell-box"), width=size, height=size)
+
+    def run(spp, seed):
+        img = render(
+            scene, camera=camera, rfilter=rfilter, spp=spp, seed=seed, max_depth=8,
+            sampler=sampler, progress=False,
+        )  # fmt: skip
+        return np.asarray(img, np.float64)
+
+    return run
+
+
+def _mitsuba(size, variant):
+    import mitsuba as mi
+
+    mi.set_variant(variant)
+    scene = mi.load_dict(cornell_dict(size, size, variant=variant))
+
+    def run(spp, seed):
+        mi.set_variant(variant)
+        return render_mitsuba(scene, spp, seed=seed)
+
+    return run
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=256)
+    parser.add_argument("--ref-spp", type=int, default=1024)
+    parser.add_argument("--spps", type=int, nargs="+", default=[4, 8, 16, 32, 64])
+    parser.add_argument("--target-spp", type=int, default=16, help="Mitsuba spp of the target")
+    parser.add_argument("--cache", type=Path, default=ROOT / "out" / "bench_render")
+    parser.add_argument("--quick", action="store_true", help="64 x 64, reference 256 spp")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.size, args.ref_spp, args.spps = 64, 256, [4, 8, 16, 32]
+    args.cache.mkdir(parents=True, exist_ok=True)
+
+    import jax
+
+    print(f"devices: {jax.devices()}; cores: {os.cpu_count()}")
+    ref_path = args.cache / f"mitsuba_ref_{args.size}_{args.ref_spp}.npy"
+    if ref_path.exists():
+        reference = np.load(ref_path)
+    else:
+        print(f"reference: Mitsuba scalar_spectral, {args.size}^2 px, {args.ref_spp} spp ...")
+        reference, t = _timed(lambda: _mitsuba(args.size, "scalar_spectral")(args.ref_spp, 12345))
+        np.save(ref_path, reference)
+        print(f"  {t:.1f} s")
+
+    renderers = {
+        "radiometria (independent)": _ours(args.size, "independent"),
+        "radiometria (sobol)": _ours(args.size, "sobol"),
+        "mitsuba scalar_spectral": _mitsuba(args.size, "scalar_spectral"),
+    }
+    llvm = os.environ.get("DRJIT_LIBLLVM_PATH") or next(
+        (p for p in LLVM_CANDIDATES if Path(p).exists()), None
+    )
+    if llvm:
+        os.environ["DRJIT_LIBLLVM_PATH"] = llvm
+        try:
+            renderers["mitsuba llvm_ad_spectral"] = _mitsuba(args.size, "llvm_ad_spectral")
+        except Exception as err:  # noqa: BLE001 (libLLVM present but unusable: report and go on)
+            print(f"llvm_ad_spectral unavailable: {err}")
+
+    results = {}
+    for name, run in renderers.items():
+        run(args.spps[0], 1)  # warm-up: compiles radiometria's step, Mitsuba's kernels
+        rows = []
+        for i, spp in enumerate(args.spps):
+            img, t = _timed(lambda spp=spp, i=i: run(spp, 100 + i))
+            rows.append({"spp": spp, "seconds": t, "rel_mse": rel_mse(img, reference),
+                         "mean_rgb": img.mean(axis=(0, 1)).tolist()})  # fmt: skip
+            print(f"{name:28s} spp {spp:4d}  {t:7.2f} s  relMSE {rows[-1]['rel_mse']:.3e}")
+        results[name] = rows
+
+    base = "mitsuba scalar_spectral"
+    target = next(r["rel_mse"] for r in results[base] if r["spp"] == args.target_spp)
+    print(f"\ncommon error: relMSE {target:.3e} (Mitsuba scalar_spectral at {args.target_spp} spp)")
+    summary = {}
+    for name, rows in results.items():
+        t = _time_at_error([r["seconds"] for r in rows], [r["rel_mse"] for r in rows], target)
+        summary[name] = t
+    for name, t in summary.items():
+        ratio = summary[base] / t
+        print(f"  {name:28s} {t:7.2f} s to equal error   speed-up vs scalar_spectral {ratio:5.2f}x")
+    ref_mean = reference.mean(axis=(0, 1))
+    ours_mean = np.asarray(results["radiometria (sobol)"][-1]["mean_rgb"])
+    print(f"\nmean RGB: reference {ref_mean}, radiometria (sobol, {args.spps[-1]} spp) {ours_mean}"
+          f", ratio {ours_mean / ref_mean}")  # fmt: skip
+
+    # The same scene from a Mitsuba XML file, through both renderers.
+    import mitsuba as mi
+
+    from radiometria.render import render
+
+    xml = args.cache / "cornell_box.xml"
+    xml.write_text(cornell_box_xml(args.size, args.size))
+    mi.set_variant("scalar_spectral")
+    theirs = render_mitsuba(mi.load_file(str(xml)), 64, seed=7)
+    ours = np.asarray(render(xml, spp=64, sampler="sobol", progress=False), np.float64)
+    print(f"XML scene, 64 spp: Mitsuba mean {theirs.mean(axis=(0, 1))}, radiometria mean "
+          f"{ours.mean(axis=(0, 1))}")  # fmt: skip
+
+    out = args.cache / f"bench_render_{args.size}.json"
+    out.write_text(json.dumps({"size": args.size, "ref_spp": args.ref_spp, "target": target,
+                               "results": results, "time_to_target": summary}, indent=1))  # fmt: skip
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

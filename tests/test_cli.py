@@ -1,0 +1,94 @@
+"""The `radiometria` command: help, `render` to EXR and PNG, and bad arguments (exit 2)."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from radiometria.camera import read_exr
+from radiometria.cli import main
+
+RENDER = ["render", "cornell-box", "--width", "16", "--height", "16", "--spp", "2"]
+
+
+def _command() -> list[str]:
+    exe = Path(sys.executable).parent / "radiometria"
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "radiometria"]
+
+
+@pytest.mark.parametrize("argv", [_command(), [sys.executable, "-m", "radiometria"]])
+def test_help_lists_the_commands(argv):
+    out = subprocess.run(argv + ["--help"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    for command in ("render", "figures", "demo", "lut"):
+        assert command in out.stdout
+
+
+def test_render_help():
+    out = subprocess.run(
+        _command() + ["render", "--help"], capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0
+    assert "--spp" in out.stdout and "--out" in out.stdout
+
+
+@pytest.mark.slow
+def test_render_writes_exr_and_png(tmp_path, capsys):
+    exr, png = tmp_path / "box.exr", tmp_path / "box.png"
+    assert main(RENDER + ["--out", str(exr)]) == 0
+    assert main(RENDER + ["--out", str(png), "--seed", "1"]) == 0
+    rgb, meta = read_exr(exr)
+    assert rgb.shape == (16, 16, 3) and rgb.dtype == np.float32
+    assert np.all(np.isfinite(rgb)) and rgb.mean() > 0.01
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "render" in capsys.readouterr().err  # the progress bar
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--spp", "0"], "spp"),
+        (["--spp", "-3"], "spp"),
+        (["--width", "0"], "width"),
+        (["--width", "100000", "--height", "100000"], "width"),
+        (["--max-depth", "0"], "max-depth"),
+        (["--seed", "-1"], "seed"),
+    ],
+)
+def test_render_rejects_bad_numbers(tmp_path, capsys, extra, message):
+    out = tmp_path / "x.exr"
+    assert main(["render", "cornell-box", "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert "error" in err and message in err
+    assert not out.exists()
+
+
+def test_render_rejects_bad_outputs(tmp_path, capsys):
+    assert main(["render", "cornell-box", "--spp", "1", "--out", str(tmp_path / "x.jpg")]) == 2
+    assert ".exr or .png" in capsys.readouterr().err
+    missing = tmp_path / "no" / "such" / "dir" / "x.exr"
+    assert main(["render", "cornell-box", "--spp", "1", "--out", str(missing)]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    if os.geteuid() != 0:  # root may write anywhere
+        locked = tmp_path / "locked"
+        locked.mkdir(mode=0o500)
+        assert main(["render", "cornell-box", "--spp", "1", "--out", str(locked / "x.exr")]) == 2
+        assert "Cannot write" in capsys.readouterr().err
+
+
+def test_render_rejects_unknown_scene(tmp_path, capsys):
+    assert main(["render", "no-such-scene", "--spp", "1", "--out", str(tmp_path / "x.exr")]) == 2
+    assert "cornell-box" in capsys.readouterr().err
+
+
+def test_render_argparse_errors_exit_2():
+    out = subprocess.run(
+        _command() + ["render", "cornell-box", "--spp", "many", "--out", "x.exr"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 2 and "invalid int value" in out.stderr
