@@ -89,11 +89,16 @@ def sample_discrete(u: FloatLike, weights: FloatLike) -> tuple[Array, Array, Arr
     ??? cite "References"
         `Pharr2023` §A.1 (`SampleDiscrete`); thesis ch. 5.
     """
-    u = check_unit_interval(as_float_array(u, "u"))
     w = as_float_array(weights, "weights")
     if w.ndim != 1 or w.shape[0] == 0:
         raise ValueError(f"`weights` must be a non-empty 1D array, got shape {w.shape}.")
-    w = _check_table(w, "weights")
+    w = _check_table(w, "weights")  # before jit, so that concrete tables fail with ValueError
+    return _sample_discrete(as_float_array(u, "u"), w)
+
+
+@eqx.filter_jit
+def _sample_discrete(u: Array, w: Array) -> tuple[Array, Array, Array]:
+    u = check_unit_interval(u)
     total = jnp.sum(w)
     cdf = jnp.concatenate([jnp.zeros((1,), w.dtype), jnp.cumsum(w) / total]).astype(u.dtype)
     idx = _find_interval(cdf[None, :], u)
@@ -145,6 +150,7 @@ class PiecewiseConstant1D(eqx.Module):
         """Number of bins."""
         return self.func.shape[0]
 
+    @eqx.filter_jit
     def sample(self, u: FloatLike) -> tuple[Array, Array, Array]:
         """Sample `x` by inverting the CDF.
 
@@ -168,6 +174,7 @@ class PiecewiseConstant1D(eqx.Module):
         pdf = self.func[o] / self.integral
         return x, pdf, o
 
+    @eqx.filter_jit
     def pdf(self, x: FloatLike) -> Array:
         """Density at `x` [1/unit of x]; 0 outside `[low, high]`.
 
@@ -181,6 +188,7 @@ class PiecewiseConstant1D(eqx.Module):
         inside = (t >= 0) & (t <= 1)
         return jnp.where(inside, self.func[o] / self.integral, 0.0)
 
+    @eqx.filter_jit
     def invert(self, x: FloatLike) -> Array:
         """The variate `u` in [0, 1) that `sample` maps to `x` [dimensionless].
 
@@ -280,6 +288,7 @@ class PiecewiseConstant2D(eqx.Module):
         pdf_x = self.func[iv, iu] / self.conditional_integral[iv]
         return jnp.stack([x, y], axis=-1), pdf_x * pdf_y, jnp.stack([iu, iv], axis=-1)
 
+    @eqx.filter_jit
     def pdf(self, p: FloatLike) -> Array:
         """Density at points `p` `(..., 2)` [1/area]; 0 outside the domain.
 
@@ -296,6 +305,7 @@ class PiecewiseConstant2D(eqx.Module):
         inside = (tx >= 0) & (tx <= 1) & (ty >= 0) & (ty <= 1)
         return jnp.where(inside, self.func[iv, iu] / self.integral, 0.0)
 
+    @eqx.filter_jit
     def invert(self, p: FloatLike) -> Float[Array, "*batch 2"]:
         """The variates `u` `(..., 2)` in [0, 1) that `sample` maps to `p` [dimensionless].
 

@@ -5,6 +5,7 @@ wherever any strategy can produce the sample; the balance heuristic is provably 
 such weighting, the power heuristic (beta = 2) does better when one strategy is much better.
 """
 
+import equinox as eqx
 import jax.numpy as jnp
 from jax import Array
 
@@ -20,6 +21,7 @@ def _ratio(a: Array, b: Array) -> Array:
     return jnp.where(jnp.isinf(a), 1.0, r)
 
 
+@eqx.filter_jit
 def balance_heuristic(
     nf: int | FloatLike, f_pdf: FloatLike, ng: int | FloatLike, g_pdf: FloatLike
 ) -> Array:
@@ -45,6 +47,7 @@ def balance_heuristic(
     return _ratio(f, g)
 
 
+@eqx.filter_jit
 def power_heuristic(
     nf: int | FloatLike, f_pdf: FloatLike, ng: int | FloatLike, g_pdf: FloatLike
 ) -> Array:
@@ -71,6 +74,7 @@ def power_heuristic(
     return _ratio(f * f, g * g)
 
 
+@eqx.filter_jit
 def mis_weights(pdfs: FloatLike, counts: FloatLike | None = None, *, beta: float = 1.0) -> Array:
     r"""MIS weights for k strategies at once: $w_i = (n_i p_i)^\beta / \sum_j (n_j p_j)^\beta$.
 

@@ -10,11 +10,14 @@ Every warp comes as a pbrt-style triad (style.md section 3):
 
 The formulas follow `Pharr2023` (pbrt-v4, `util/sampling.h`, ch. A.5 and 2.2) unless stated.
 Variates are checked to lie in [0, 1) with `equinox.error_if`; set `EQX_ON_ERROR=nan` to skip
-the check's error in hot loops.
+the check's error in hot loops. Each public warp is wrapped in `equinox.filter_jit`: called eagerly
+it compiles once per shape instead of dispatching dozens of tiny operations, and inside a caller's
+`jit` it is simply inlined.
 """
 
 import math
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
@@ -66,6 +69,7 @@ def _frac_to_unit(x: Array) -> Array:
 # --------------------------------------------------------------------------------------------
 
 
+@eqx.filter_jit
 def sample_uniform_disk_polar(u: FloatLike) -> Float[Array, "*batch 2"]:
     r"""Uniform point on the unit disk by the polar map $r = \sqrt{u_0}$, $\phi = 2\pi u_1$.
 
@@ -86,6 +90,7 @@ def sample_uniform_disk_polar(u: FloatLike) -> Float[Array, "*batch 2"]:
     return jnp.stack([r * jnp.cos(theta), r * jnp.sin(theta)], axis=-1)
 
 
+@eqx.filter_jit
 def uniform_disk_pdf(p: FloatLike | None = None) -> Array:
     """Density of a uniform point on the unit disk: 1/pi inside, 0 outside.
 
@@ -107,6 +112,7 @@ def uniform_disk_pdf(p: FloatLike | None = None) -> Array:
     return jnp.where(inside, INV_PI, 0.0).astype(p.dtype)
 
 
+@eqx.filter_jit
 def invert_uniform_disk_polar_sample(p: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_uniform_disk_polar`: the variates `u` that give the disk point `p`.
 
@@ -127,6 +133,7 @@ def invert_uniform_disk_polar_sample(p: FloatLike) -> Float[Array, "*batch 2"]:
     return _frac_to_unit(jnp.stack([r2, phi * INV_2PI], axis=-1))
 
 
+@eqx.filter_jit
 def sample_uniform_disk_concentric(u: FloatLike) -> Float[Array, "*batch 2"]:
     """Uniform point on the unit disk by Shirley and Chiu's concentric map.
 
@@ -156,6 +163,7 @@ def sample_uniform_disk_concentric(u: FloatLike) -> Float[Array, "*batch 2"]:
     return jnp.stack([r * jnp.cos(theta), r * jnp.sin(theta)], axis=-1)
 
 
+@eqx.filter_jit
 def invert_uniform_disk_concentric_sample(p: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_uniform_disk_concentric`: disk point `p` -> variates `u`.
 
@@ -195,6 +203,7 @@ def invert_uniform_disk_concentric_sample(p: FloatLike) -> Float[Array, "*batch 
 # --------------------------------------------------------------------------------------------
 
 
+@eqx.filter_jit
 def sample_cosine_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     r"""Cosine-weighted direction on the +z hemisphere (Malley's method).
 
@@ -217,6 +226,7 @@ def sample_cosine_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     return jnp.concatenate([d, z[..., None]], axis=-1)
 
 
+@eqx.filter_jit
 def cosine_hemisphere_pdf(cos_theta: FloatLike) -> Array:
     r"""Density $p(\omega) = \cos\theta / \pi$ of `sample_cosine_hemisphere` (0 below the horizon).
 
@@ -235,6 +245,7 @@ def cosine_hemisphere_pdf(cos_theta: FloatLike) -> Array:
     return jnp.where(c > 0, c * INV_PI, 0.0).astype(c.dtype)
 
 
+@eqx.filter_jit
 def invert_cosine_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_cosine_hemisphere`: direction `w` -> variates `u`.
 
@@ -253,6 +264,7 @@ def invert_cosine_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     return invert_uniform_disk_concentric_sample(w[..., :2])
 
 
+@eqx.filter_jit
 def sample_uniform_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     """Uniform direction on the +z hemisphere: `z = u0`, `phi = 2 pi u1`.
 
@@ -274,6 +286,7 @@ def sample_uniform_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     return jnp.stack([r * jnp.cos(phi), r * jnp.sin(phi), z], axis=-1)
 
 
+@eqx.filter_jit
 def uniform_hemisphere_pdf(w: FloatLike | None = None) -> Array:
     """Density of `sample_uniform_hemisphere`: `1/(2 pi)` on the +z hemisphere.
 
@@ -294,6 +307,7 @@ def uniform_hemisphere_pdf(w: FloatLike | None = None) -> Array:
     return jnp.where(w[..., 2] >= 0, INV_2PI, 0.0).astype(w.dtype)
 
 
+@eqx.filter_jit
 def invert_uniform_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_uniform_hemisphere`: direction -> variates.
 
@@ -313,6 +327,7 @@ def invert_uniform_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     return _frac_to_unit(jnp.stack([w[..., 2], phi * INV_2PI], axis=-1))
 
 
+@eqx.filter_jit
 def sample_uniform_sphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     """Uniform direction on the unit sphere: `z = 1 - 2 u0`, `phi = 2 pi u1`.
 
@@ -334,6 +349,7 @@ def sample_uniform_sphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     return jnp.stack([r * jnp.cos(phi), r * jnp.sin(phi), z], axis=-1)
 
 
+@eqx.filter_jit
 def uniform_sphere_pdf(w: FloatLike | None = None) -> Array:
     """Density of `sample_uniform_sphere`: the constant `1/(4 pi)`.
 
@@ -354,6 +370,7 @@ def uniform_sphere_pdf(w: FloatLike | None = None) -> Array:
     return jnp.full(w.shape[:-1], INV_4PI, dtype=w.dtype)
 
 
+@eqx.filter_jit
 def invert_uniform_sphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_uniform_sphere`: direction -> variates.
 
@@ -373,6 +390,7 @@ def invert_uniform_sphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     return _frac_to_unit(jnp.stack([(1.0 - w[..., 2]) / 2, phi * INV_2PI], axis=-1))
 
 
+@eqx.filter_jit
 def sample_uniform_cone(u: FloatLike, cos_theta_max: FloatLike) -> Float[Array, "*batch 3"]:
     r"""Uniform direction in the cone of half-angle $\theta_{max}$ around +z.
 
@@ -398,6 +416,7 @@ def sample_uniform_cone(u: FloatLike, cos_theta_max: FloatLike) -> Float[Array, 
     return jnp.stack([sin_t * jnp.cos(phi), sin_t * jnp.sin(phi), cos_t], axis=-1)
 
 
+@eqx.filter_jit
 def uniform_cone_pdf(cos_theta_max: FloatLike, w: FloatLike | None = None) -> Array:
     """Density of `sample_uniform_cone`: `1/(2 pi (1 - cos_theta_max))` inside the cone.
 
@@ -421,6 +440,7 @@ def uniform_cone_pdf(cos_theta_max: FloatLike, w: FloatLike | None = None) -> Ar
     return jnp.where(w[..., 2] >= c, pdf, 0.0)
 
 
+@eqx.filter_jit
 def invert_uniform_cone_sample(w: FloatLike, cos_theta_max: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_uniform_cone`: direction -> variates.
 
@@ -448,6 +468,7 @@ def invert_uniform_cone_sample(w: FloatLike, cos_theta_max: FloatLike) -> Float[
 # --------------------------------------------------------------------------------------------
 
 
+@eqx.filter_jit
 def sample_uniform_triangle(u: FloatLike) -> Float[Array, "*batch 3"]:
     """Uniform barycentric coordinates `(b0, b1, b2)` on a triangle (Heitz's low-distortion map).
 
@@ -473,6 +494,7 @@ def sample_uniform_triangle(u: FloatLike) -> Float[Array, "*batch 3"]:
     return jnp.stack([b0, b1, 1.0 - b0 - b1], axis=-1)
 
 
+@eqx.filter_jit
 def uniform_triangle_pdf(b: FloatLike | None = None) -> Array:
     """Density of `sample_uniform_triangle` over the barycentric plane `(b0, b1)`: 2 inside.
 
@@ -498,6 +520,7 @@ def uniform_triangle_pdf(b: FloatLike | None = None) -> Array:
     return jnp.where(inside, 2.0, 0.0).astype(b.dtype)
 
 
+@eqx.filter_jit
 def invert_uniform_triangle_sample(b: FloatLike) -> Float[Array, "*batch 2"]:
     """Invert `sample_uniform_triangle`: barycentrics `(..., 2 or 3)` -> variates `(..., 2)`.
 
@@ -565,6 +588,7 @@ def _vertices(a, b, c, *others):
     return (_normalize(a), _normalize(b), _normalize(c), *others)
 
 
+@eqx.filter_jit
 def spherical_triangle_area(a: FloatLike, b: FloatLike, c: FloatLike) -> Array:
     """Solid angle of the spherical triangle with vertex directions `a`, `b`, `c`.
 
@@ -586,6 +610,7 @@ def spherical_triangle_area(a: FloatLike, b: FloatLike, c: FloatLike) -> Array:
     return alpha + beta + gamma - PI
 
 
+@eqx.filter_jit
 def sample_spherical_triangle(
     u: FloatLike, a: FloatLike, b: FloatLike, c: FloatLike
 ) -> Float[Array, "*batch 3"]:
@@ -627,6 +652,7 @@ def sample_spherical_triangle(
     return cos_t[..., None] * b + sin_t[..., None] * _normalize(_gram_schmidt(cp, b))
 
 
+@eqx.filter_jit
 def spherical_triangle_pdf(
     a: FloatLike, b: FloatLike, c: FloatLike, w: FloatLike | None = None
 ) -> Array:
@@ -660,6 +686,7 @@ def spherical_triangle_pdf(
     return jnp.where(inside, pdf, 0.0)
 
 
+@eqx.filter_jit
 def invert_spherical_triangle_sample(
     w: FloatLike, a: FloatLike, b: FloatLike, c: FloatLike
 ) -> Float[Array, "*batch 2"]:
@@ -699,6 +726,7 @@ def invert_spherical_triangle_sample(
 # --------------------------------------------------------------------------------------------
 
 
+@eqx.filter_jit
 def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     r"""Sample $x \in [0, 1)$ with density proportional to the line $(1-x) a + x b$.
 
@@ -723,6 +751,7 @@ def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     return jnp.minimum(x, one_minus_eps)
 
 
+@eqx.filter_jit
 def linear_pdf(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     """Density `2 ((1-x) a + x b) / (a + b)` on [0, 1] of `sample_linear` (0 outside).
 
@@ -745,6 +774,7 @@ def linear_pdf(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     return jnp.where(inside, 2 * ((1 - x) * a + x * b) / (a + b), 0.0)
 
 
+@eqx.filter_jit
 def invert_linear_sample(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     """Invert `sample_linear`: `u = x (a (2 - x) + b x) / (a + b)`.
 
@@ -766,6 +796,7 @@ def invert_linear_sample(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     return _frac_to_unit(x * (a * (2 - x) + b * x) / (a + b))
 
 
+@eqx.filter_jit
 def sample_tent(u: FloatLike, radius: FloatLike) -> Array:
     """Sample the tent (triangle) density of half-width `radius` centred at 0.
 
@@ -793,6 +824,7 @@ def sample_tent(u: FloatLike, radius: FloatLike) -> Array:
     return jnp.where(left, x_left, x_right)
 
 
+@eqx.filter_jit
 def tent_pdf(x: FloatLike, radius: FloatLike) -> Array:
     """Density `1/r - |x|/r^2` of the tent of half-width `r` (0 for `|x| >= r`).
 
@@ -813,6 +845,7 @@ def tent_pdf(x: FloatLike, radius: FloatLike) -> Array:
     return jnp.where(jnp.abs(x) < r, 1 / r - jnp.abs(x) / (r * r), 0.0)
 
 
+@eqx.filter_jit
 def invert_tent_sample(x: FloatLike, radius: FloatLike) -> Array:
     """Invert `sample_tent`: sample `x` in (-r, r) -> variate `u`.
 
@@ -836,6 +869,7 @@ def invert_tent_sample(x: FloatLike, radius: FloatLike) -> Array:
     return _frac_to_unit(jnp.where(left, u_left, u_right))
 
 
+@eqx.filter_jit
 def sample_exponential(u: FloatLike, a: FloatLike) -> Array:
     """Sample the exponential density `a exp(-a x)` on [0, inf): `x = -log(1 - u) / a`.
 
@@ -856,6 +890,7 @@ def sample_exponential(u: FloatLike, a: FloatLike) -> Array:
     return -jnp.log1p(-u) / a
 
 
+@eqx.filter_jit
 def exponential_pdf(x: FloatLike, a: FloatLike) -> Array:
     """Density `a exp(-a x)` of `sample_exponential` (0 for `x < 0`).
 
@@ -876,6 +911,7 @@ def exponential_pdf(x: FloatLike, a: FloatLike) -> Array:
     return jnp.where(x >= 0, a * jnp.exp(-a * jnp.maximum(x, 0.0)), 0.0)
 
 
+@eqx.filter_jit
 def invert_exponential_sample(x: FloatLike, a: FloatLike) -> Array:
     """Invert `sample_exponential`: `u = 1 - exp(-a x)`.
 
@@ -912,6 +948,7 @@ _VIS_T1 = math.tanh(_VIS_K * (VISIBLE_MAX_NM - _VIS_MU))
 _VIS_NORM = _VIS_K / (_VIS_T0 + _VIS_T1)  # 0.0039398042... nm^-1
 
 
+@eqx.filter_jit
 def sample_visible_wavelengths(u: FloatLike) -> Array:
     r"""Sample wavelengths in [360, 830] nm with pbrt-v4's visible-light density.
 
@@ -936,6 +973,7 @@ def sample_visible_wavelengths(u: FloatLike) -> Array:
     return jnp.clip(lam, VISIBLE_MIN_NM, VISIBLE_MAX_NM)
 
 
+@eqx.filter_jit
 def visible_wavelengths_pdf(wavelength_nm: FloatLike) -> Array:
     r"""Density of `sample_visible_wavelengths`: $0.0039398 / \cosh^2(0.0072(\lambda - 538))$.
 
@@ -955,6 +993,7 @@ def visible_wavelengths_pdf(wavelength_nm: FloatLike) -> Array:
     return jnp.where(inside, _VIS_NORM / jnp.cosh(_VIS_K * (lam - _VIS_MU)) ** 2, 0.0)
 
 
+@eqx.filter_jit
 def invert_visible_wavelengths_sample(wavelength_nm: FloatLike) -> Array:
     """Invert `sample_visible_wavelengths`: wavelength -> variate (its CDF).
 
