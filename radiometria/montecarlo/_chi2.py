@@ -42,7 +42,8 @@ class Chi2Result(eqx.Module):
     - `message`: a one-paragraph summary, suitable for `assert result.passed, result.message`.
 
     ??? cite "References"
-        `Jakob2022` (`mitsuba.chi2`); thesis app. A.
+        `Jakob2022` (`mitsuba.chi2`).
+        Thesis app. A.
     """
 
     statistic: float
@@ -235,7 +236,8 @@ def chi2_test(
     ```
 
     ??? cite "References"
-        `Jakob2022` (`mitsuba.chi2`); `Owen2013` ch. 2; thesis app. A.
+        `Jakob2022` (`mitsuba.chi2`); `Owen2013` ch. 2.
+        Thesis app. A.
     """
     check_choice(domain, "domain", _DOMAINS)
     n = check_positive_int(n_samples, "n_samples")

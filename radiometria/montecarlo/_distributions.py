@@ -87,7 +87,8 @@ def sample_discrete(u: FloatLike, weights: FloatLike) -> tuple[Array, Array, Arr
     [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.1 (`SampleDiscrete`); thesis ch. 5.
+        `Pharr2023` §A.1 (`SampleDiscrete`).
+        Thesis ch. 5.
     """
     w = as_float_array(weights, "weights")
     if w.ndim != 1 or w.shape[0] == 0:
@@ -122,7 +123,8 @@ class PiecewiseConstant1D(eqx.Module):
     - `low`, `high`: the domain, `low < high`. [unit of x, e.g. nm]
 
     ??? cite "References"
-        `Pharr2023` §A.4.1 (`PiecewiseConstant1D`); thesis ch. 5.
+        `Pharr2023` §A.4.1 (`PiecewiseConstant1D`).
+        Thesis ch. 5.
     """
 
     func: Float[Array, " n"]
@@ -219,7 +221,8 @@ class PiecewiseConstant2D(eqx.Module):
     - `bounds`: `((x0, x1), (y0, y1))`, the domain; the unit square by default. [unit of x, y]
 
     ??? cite "References"
-        `Pharr2023` §A.5.6 (`PiecewiseConstant2D`); thesis ch. 5.
+        `Pharr2023` §A.5.6 (`PiecewiseConstant2D`).
+        Thesis ch. 5.
     """
 
     func: Float[Array, "nv nu"]

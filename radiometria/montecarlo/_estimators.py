@@ -36,7 +36,8 @@ class Estimate(eqx.Module):
     `confidence_interval(level)` gives a normal-theory interval.
 
     ??? cite "References"
-        `Owen2013` §2.1-2.3; thesis ch. 6.
+        `Owen2013` §2.1-2.3.
+        Thesis ch. 6.
     """
 
     mean: Array
@@ -192,7 +193,8 @@ def mis_estimate(
     An `Estimate`; its variance is the sum of the per-strategy variances.
 
     ??? cite "References"
-        `Veach1995`; `Veach1997` §9.2; `Pharr2023` §2.2.3; thesis ch. 7.
+        `Veach1995`; `Veach1997` §9.2; `Pharr2023` §2.2.3.
+        Thesis ch. 7.
     """
     check_choice(heuristic, "heuristic", ["balance", "power"])
     beta = 1.0 if heuristic == "balance" else 2.0
@@ -246,7 +248,8 @@ def one_sample_mis(
     An `Estimate`.
 
     ??? cite "References"
-        `Veach1997` §9.2.4; thesis ch. 7.
+        `Veach1997` §9.2.4.
+        Thesis ch. 7.
     """
     check_choice(heuristic, "heuristic", ["balance", "power"])
     c = as_float_array(probabilities, "probabilities")
@@ -293,7 +296,8 @@ def stratified_estimate(
     An `Estimate`.
 
     ??? cite "References"
-        `Owen2013` §10.1; `Pharr2023` §8.5; thesis ch. 7.
+        `Owen2013` §10.1; `Pharr2023` §8.5.
+        Thesis ch. 7.
     """
     strata = tuple(check_positive_int(s, "strata") for s in strata)
     m = check_positive_int(n_per_stratum, "n_per_stratum")
@@ -331,7 +335,8 @@ def control_variate(values, control_values, control_mean, *, beta=None) -> Estim
     `(1 - rho^2) Var(Y)/n`).
 
     ??? cite "References"
-        `Owen2013` §8.9; thesis ch. 7.
+        `Owen2013` §8.9.
+        Thesis ch. 7.
     """
     y = as_float_array(values, "values")
     g = as_float_array(control_values, "control_values")
@@ -374,7 +379,8 @@ def antithetic(
     An `Estimate` over the `n` pair means (variance reduced for monotone f).
 
     ??? cite "References"
-        `Owen2013` §8.2; thesis ch. 7.
+        `Owen2013` §8.2.
+        Thesis ch. 7.
     """
     u = _variates(n, u_dim, key, u)
     u2 = jnp.minimum(1.0 - u, 1.0 - jnp.finfo(u.dtype).epsneg)
@@ -397,7 +403,8 @@ def russian_roulette(value, survival_probability, u):
     by branching, so it runs in a `lax.scan` bounce loop.
 
     ??? cite "References"
-        `Arvo1990`; `Pharr2023` §2.2.4, §13.7; thesis ch. 7.
+        `Arvo1990`; `Pharr2023` §2.2.4, §13.7.
+        Thesis ch. 7.
     """
     v = as_float_array(value, "value")
     q = as_float_array(survival_probability, "survival_probability")
@@ -425,7 +432,8 @@ def roulette_and_split(weight, target, u) -> tuple[Array, Array]:
     `(copies, new_weight)`: int32 number of copies (0 means killed) and the weight of each.
 
     ??? cite "References"
-        `Vorba2016`; `Pharr2023` §2.2.4; thesis ch. 7.
+        `Vorba2016`; `Pharr2023` §2.2.4.
+        Thesis ch. 7.
     """
     w = as_float_array(weight, "weight")
     t = as_float_array(target, "target")
@@ -460,7 +468,8 @@ def weighted_importance_sampling(values, weights, *, axis: int = 0) -> Estimate:
         Eq. 2.34 and eq. 2.35.
 
     ??? cite "References"
-        `Owen2013` §9.2; `Pharr2023` §5.4.3, §8.8; thesis sec. 2.3.2.
+        `Owen2013` §9.2; `Pharr2023` §5.4.3, §8.8.
+        Thesis sec. 2.3.2.
     """
     if axis != 0:
         raise ValueError("only `axis=0` is supported.")
@@ -513,7 +522,8 @@ def filter_importance_sampling(
         Eq. 2.32, 2.35, section 2.3.2.
 
     ??? cite "References"
-        `Ernst2006`; `Pharr2023` §8.8; thesis sec. 2.3.2.
+        `Ernst2006`; `Pharr2023` §8.8.
+        Thesis sec. 2.3.2.
     """
     x = filter_sample(_variates(n, 2, key, u))
     p = jnp.asarray(filter_pdf(x))
@@ -620,7 +630,8 @@ def integrate(
     replicates otherwise). [unit of f x measure (volume or sr)]
 
     ??? cite "References"
-        `Owen2013` ch. 2, 17; `Pharr2023` §2.1; thesis ch. 6.
+        `Owen2013` ch. 2, 17; `Pharr2023` §2.1.
+        Thesis ch. 6.
     """
     check_choice(method, "method", _METHODS)
     n = check_positive_int(n, "n")
@@ -648,7 +659,8 @@ class ConvergenceStudy(eqx.Module):
       plain MC gives about -1/2, Owen-scrambled Sobol about -3/2 for smooth integrands.
 
     ??? cite "References"
-        `Owen2013` §17.3; thesis ch. 6.
+        `Owen2013` §17.3.
+        Thesis ch. 6.
     """
 
     ns: Array
@@ -684,7 +696,8 @@ def convergence_study(
     A `ConvergenceStudy`.
 
     ??? cite "References"
-        `Owen2013` §17.3; `Owen1997`; thesis ch. 6.
+        `Owen2013` §17.3; `Owen1997`.
+        Thesis ch. 6.
     """
     check_choice(method, "method", _METHODS)
     ns = [check_positive_int(m, "ns") for m in ns]

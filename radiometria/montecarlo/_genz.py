@@ -48,7 +48,8 @@ def genz(kind: str, a, w) -> tuple[Callable[[Array], Array], float]:
     [dimensionless]
 
     ??? cite "References"
-        `Genz1984`; `Owen2013` ch. 17; thesis ch. 6.
+        `Genz1984`; `Owen2013` ch. 17.
+        Thesis ch. 6.
     """
     check_choice(kind, "kind", GENZ_FAMILIES)
     a = np.asarray(a, dtype=np.float64)

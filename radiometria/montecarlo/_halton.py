@@ -270,7 +270,8 @@ def halton(
     Points `(n, d)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Halton1960`; `Owen2017`; `Kensler2013`; `Pharr2023` §8.6; thesis ch. 5.
+        `Halton1960`; `Owen2017`; `Kensler2013`; `Pharr2023` §8.6.
+        Thesis ch. 5.
     """
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")

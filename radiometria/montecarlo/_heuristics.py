@@ -40,7 +40,8 @@ def balance_heuristic(
     The weight in [0, 1]; 0 where both densities are 0. [dimensionless]
 
     ??? cite "References"
-        `Veach1995`; `Veach1997` §9.2.2; `Pharr2023` §2.2.3; thesis ch. 7.
+        `Veach1995`; `Veach1997` §9.2.2; `Pharr2023` §2.2.3.
+        Thesis ch. 7.
     """
     f = as_float_array(nf, "nf") * as_float_array(f_pdf, "f_pdf")
     g = as_float_array(ng, "ng") * as_float_array(g_pdf, "g_pdf")
@@ -67,7 +68,8 @@ def power_heuristic(
     (a delta distribution), as in pbrt. [dimensionless]
 
     ??? cite "References"
-        `Veach1995`; `Veach1997` §9.2.4; `Pharr2023` §2.2.3; thesis ch. 7.
+        `Veach1995`; `Veach1997` §9.2.4; `Pharr2023` §2.2.3.
+        Thesis ch. 7.
     """
     f = as_float_array(nf, "nf") * as_float_array(f_pdf, "f_pdf")
     g = as_float_array(ng, "ng") * as_float_array(g_pdf, "g_pdf")
@@ -91,7 +93,8 @@ def mis_weights(pdfs: FloatLike, counts: FloatLike | None = None, *, beta: float
     [dimensionless]
 
     ??? cite "References"
-        `Veach1997` §9.2; thesis ch. 7.
+        `Veach1997` §9.2.
+        Thesis ch. 7.
     """
     p = as_float_array(pdfs, "pdfs")
     if p.ndim == 0:

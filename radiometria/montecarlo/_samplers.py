@@ -73,7 +73,8 @@ def independent(
     Points `(n, d)`. [dimensionless]
 
     ??? cite "References"
-        `Owen2013` ch. 2-3; `Pharr2023` §8.3; thesis ch. 6.
+        `Owen2013` ch. 2-3; `Pharr2023` §8.3.
+        Thesis ch. 6.
     """
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")
@@ -103,7 +104,8 @@ def stratified(strata, *, key: Key, jitter: bool = True, dtype=None) -> Array:
     Points `(prod(strata), d)`, cells in row-major order (the last axis fastest). [dimensionless]
 
     ??? cite "References"
-        `Owen2013` ch. 10; `Pharr2023` §8.5; thesis ch. 7.
+        `Owen2013` ch. 10; `Pharr2023` §8.5.
+        Thesis ch. 7.
     """
     strata = (strata,) if isinstance(strata, int | np.integer) else tuple(strata)
     if len(strata) == 0:
@@ -134,7 +136,8 @@ def latin_hypercube(n: int, d: int, *, key: Key, dtype=None) -> Float[Array, "n 
     Points `(n, d)`. [dimensionless]
 
     ??? cite "References"
-        `McKay1979`; `Owen2013` ch. 10; `Pharr2023` §8.5; thesis ch. 7.
+        `McKay1979`; `Owen2013` ch. 10; `Pharr2023` §8.5.
+        Thesis ch. 7.
     """
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")
@@ -176,7 +179,8 @@ def kronecker(
     Points `(n, d)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Roberts2018`; `Cranley1976`; `Owen2013` ch. 15; thesis ch. 5.
+        `Roberts2018`; `Cranley1976`; `Owen2013` ch. 15.
+        Thesis ch. 5.
     """
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")
@@ -230,7 +234,8 @@ def rank1_lattice(
     Points `(n, d)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Sloan1994`; `Cranley1976`; `Owen2013` ch. 16; thesis ch. 5.
+        `Sloan1994`; `Cranley1976`; `Owen2013` ch. 16.
+        Thesis ch. 5.
     """
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")

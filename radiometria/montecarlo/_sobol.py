@@ -213,7 +213,8 @@ def sobol(
     ```
 
     ??? cite "References"
-        `Sobol1967`; `Joe2008`; `Owen1995`; `Burley2020`; `Pharr2023` §8.7; thesis ch. 5.
+        `Sobol1967`; `Joe2008`; `Owen1995`; `Burley2020`; `Pharr2023` §8.7.
+        Thesis ch. 5.
     """
     n = check_positive_int(n, "n")
     d = check_positive_int(d, "d")

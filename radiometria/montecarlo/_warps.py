@@ -82,7 +82,8 @@ def sample_uniform_disk_polar(u: FloatLike) -> Float[Array, "*batch 2"]:
     Points `(..., 2)` on the unit disk; density `uniform_disk_pdf() = 1/pi` per unit area. [m]
 
     ??? cite "References"
-        `Pharr2023` §A.5.1; thesis ch. 5.
+        `Pharr2023` §A.5.1.
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     r = jnp.sqrt(u[..., 0])
@@ -103,7 +104,8 @@ def uniform_disk_pdf(p: FloatLike | None = None) -> Array:
     Density per unit area. [m^-2]
 
     ??? cite "References"
-        `Pharr2023` §A.5.1; thesis ch. 5.
+        `Pharr2023` §A.5.1.
+        Thesis ch. 5.
     """
     if p is None:
         return jnp.asarray(INV_PI)
@@ -125,7 +127,8 @@ def invert_uniform_disk_polar_sample(p: FloatLike) -> Float[Array, "*batch 2"]:
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.1; thesis ch. 5.
+        `Pharr2023` §A.5.1.
+        Thesis ch. 5.
     """
     p = check_last_axis(as_float_array(p, "p"), "p", 2)
     r2 = jnp.sum(p * p, axis=-1)
@@ -149,7 +152,8 @@ def sample_uniform_disk_concentric(u: FloatLike) -> Float[Array, "*batch 2"]:
     Points `(..., 2)` on the unit disk, density 1/pi. [m]
 
     ??? cite "References"
-        `Shirley1997`; `Pharr2023` §A.5.1; thesis ch. 5.
+        `Shirley1997`; `Pharr2023` §A.5.1.
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     o = 2.0 * u - 1.0
@@ -176,7 +180,8 @@ def invert_uniform_disk_concentric_sample(p: FloatLike) -> Float[Array, "*batch 
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.1 (`InvertUniformDiskConcentricSample`); `Shirley1997`; thesis ch. 5.
+        `Pharr2023` §A.5.1 (`InvertUniformDiskConcentricSample`); `Shirley1997`.
+        Thesis ch. 5.
     """
     p = check_last_axis(as_float_array(p, "p"), "p", 2)
     theta = jnp.arctan2(p[..., 1], p[..., 0])
@@ -219,7 +224,8 @@ def sample_cosine_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     (`cosine_hemisphere_pdf`). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.3; `Shirley1997`; thesis ch. 5.
+        `Pharr2023` §A.5.3; `Shirley1997`.
+        Thesis ch. 5.
     """
     d = sample_uniform_disk_concentric(u)
     z = _safe_sqrt(1.0 - d[..., 0] ** 2 - d[..., 1] ** 2)
@@ -239,7 +245,8 @@ def cosine_hemisphere_pdf(cos_theta: FloatLike) -> Array:
     Density per steradian. [sr^-1]
 
     ??? cite "References"
-        `Pharr2023` §A.5.3; thesis ch. 5.
+        `Pharr2023` §A.5.3.
+        Thesis ch. 5.
     """
     c = as_float_array(cos_theta, "cos_theta")
     return jnp.where(c > 0, c * INV_PI, 0.0).astype(c.dtype)
@@ -258,7 +265,8 @@ def invert_cosine_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.3; thesis ch. 5.
+        `Pharr2023` §A.5.3.
+        Thesis ch. 5.
     """
     w = check_last_axis(as_float_array(w, "w"), "w", 3)
     return invert_uniform_disk_concentric_sample(w[..., :2])
@@ -277,7 +285,8 @@ def sample_uniform_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     Unit directions `(..., 3)`, density `1/(2 pi)` per steradian. [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.2; thesis ch. 5.
+        `Pharr2023` §A.5.2.
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     z = u[..., 0]
@@ -299,7 +308,8 @@ def uniform_hemisphere_pdf(w: FloatLike | None = None) -> Array:
     Density per steradian (0 for `z < 0`). [sr^-1]
 
     ??? cite "References"
-        `Pharr2023` §A.5.2; thesis ch. 5.
+        `Pharr2023` §A.5.2.
+        Thesis ch. 5.
     """
     if w is None:
         return jnp.asarray(INV_2PI)
@@ -320,7 +330,8 @@ def invert_uniform_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.2; thesis ch. 5.
+        `Pharr2023` §A.5.2.
+        Thesis ch. 5.
     """
     w = check_last_axis(as_float_array(w, "w"), "w", 3)
     phi = _atan2_0_2pi(w[..., 1], w[..., 0])
@@ -340,7 +351,8 @@ def sample_uniform_sphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     Unit directions `(..., 3)`, density `1/(4 pi)` per steradian. [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.2; thesis ch. 5.
+        `Pharr2023` §A.5.2.
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     z = 1.0 - 2.0 * u[..., 0]
@@ -362,7 +374,8 @@ def uniform_sphere_pdf(w: FloatLike | None = None) -> Array:
     Density per steradian. [sr^-1]
 
     ??? cite "References"
-        `Pharr2023` §A.5.2; thesis ch. 5.
+        `Pharr2023` §A.5.2.
+        Thesis ch. 5.
     """
     if w is None:
         return jnp.asarray(INV_4PI)
@@ -383,7 +396,8 @@ def invert_uniform_sphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.2; thesis ch. 5.
+        `Pharr2023` §A.5.2.
+        Thesis ch. 5.
     """
     w = check_last_axis(as_float_array(w, "w"), "w", 3)
     phi = _atan2_0_2pi(w[..., 1], w[..., 0])
@@ -406,7 +420,8 @@ def sample_uniform_cone(u: FloatLike, cos_theta_max: FloatLike) -> Float[Array, 
     Unit directions `(..., 3)`, density `1/(2 pi (1 - cos_theta_max))`. [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.4; thesis ch. 5.
+        `Pharr2023` §A.5.4.
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     c = as_float_array(cos_theta_max, "cos_theta_max")
@@ -430,7 +445,8 @@ def uniform_cone_pdf(cos_theta_max: FloatLike, w: FloatLike | None = None) -> Ar
     Density per steradian. [sr^-1]
 
     ??? cite "References"
-        `Pharr2023` §A.5.4; thesis ch. 5.
+        `Pharr2023` §A.5.4.
+        Thesis ch. 5.
     """
     c = as_float_array(cos_theta_max, "cos_theta_max")
     pdf = 1.0 / (2 * PI * (1.0 - c))
@@ -454,7 +470,8 @@ def invert_uniform_cone_sample(w: FloatLike, cos_theta_max: FloatLike) -> Float[
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.4; thesis ch. 5.
+        `Pharr2023` §A.5.4.
+        Thesis ch. 5.
     """
     w = check_last_axis(as_float_array(w, "w"), "w", 3)
     c = as_float_array(cos_theta_max, "cos_theta_max")
@@ -484,7 +501,8 @@ def sample_uniform_triangle(u: FloatLike) -> Float[Array, "*batch 3"]:
     (`uniform_triangle_pdf`); over the triangle it is 1/area. [dimensionless]
 
     ??? cite "References"
-        `Heitz2019`; `Pharr2023` §A.5.5; thesis ch. 5.
+        `Heitz2019`; `Pharr2023` §A.5.5.
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     u0, u1 = u[..., 0], u[..., 1]
@@ -510,7 +528,8 @@ def uniform_triangle_pdf(b: FloatLike | None = None) -> Array:
     Density with respect to `db0 db1`. [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.5; thesis ch. 5.
+        `Pharr2023` §A.5.5.
+        Thesis ch. 5.
     """
     if b is None:
         return jnp.asarray(2.0)
@@ -533,7 +552,8 @@ def invert_uniform_triangle_sample(b: FloatLike) -> Float[Array, "*batch 2"]:
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.5.5; thesis ch. 5.
+        `Pharr2023` §A.5.5.
+        Thesis ch. 5.
     """
     b = as_float_array(b, "b")
     b0, b1 = b[..., 0], b[..., 1]
@@ -603,7 +623,8 @@ def spherical_triangle_area(a: FloatLike, b: FloatLike, c: FloatLike) -> Array:
     Solid angle. [sr]
 
     ??? cite "References"
-        `Arvo1995`; `Pharr2023` §6.5.4; thesis ch. 5.
+        `Arvo1995`; `Pharr2023` §6.5.4.
+        Thesis ch. 5.
     """
     a, b, c = _vertices(a, b, c)
     _, alpha, beta, gamma = _sph_tri_setup(a, b, c)
@@ -630,7 +651,8 @@ def sample_spherical_triangle(
     [dimensionless]
 
     ??? cite "References"
-        `Arvo1995`; `Pharr2023` §6.5.4 (`SampleSphericalTriangle`); thesis ch. 5.
+        `Arvo1995`; `Pharr2023` §6.5.4 (`SampleSphericalTriangle`).
+        Thesis ch. 5.
     """
     u = _u(u, 2)
     a, b, c, u = _vertices(a, b, c, u)
@@ -668,7 +690,8 @@ def spherical_triangle_pdf(
     Density per steradian. [sr^-1]
 
     ??? cite "References"
-        `Arvo1995`; `Pharr2023` §6.5.4; thesis ch. 5.
+        `Arvo1995`; `Pharr2023` §6.5.4.
+        Thesis ch. 5.
     """
     if w is None:
         area = spherical_triangle_area(a, b, c)
@@ -702,7 +725,8 @@ def invert_spherical_triangle_sample(
     Variates `(..., 2)` in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §6.5.4 (`InvertSphericalTriangleSample`); `Arvo1995`; thesis ch. 5.
+        `Pharr2023` §6.5.4 (`InvertSphericalTriangleSample`); `Arvo1995`.
+        Thesis ch. 5.
     """
     w = check_last_axis(as_float_array(w, "w"), "w", 3)
     a, b, c, w = _vertices(a, b, c, w)
@@ -740,7 +764,8 @@ def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     Samples in [0, 1), density `linear_pdf(x, a, b)`. [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §2.3.1 (`SampleLinear`); thesis ch. 5.
+        `Pharr2023` §2.3.1 (`SampleLinear`).
+        Thesis ch. 5.
     """
     u = _u(u)
     a = as_float_array(a, "a")
@@ -765,7 +790,8 @@ def linear_pdf(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     Density with respect to `dx`. [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §2.3.1; thesis ch. 5.
+        `Pharr2023` §2.3.1.
+        Thesis ch. 5.
     """
     x = as_float_array(x, "x")
     a = as_float_array(a, "a")
@@ -788,7 +814,8 @@ def invert_linear_sample(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
     Variates in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §2.3.1; thesis ch. 5.
+        `Pharr2023` §2.3.1.
+        Thesis ch. 5.
     """
     x = as_float_array(x, "x")
     a = as_float_array(a, "a")
@@ -812,7 +839,8 @@ def sample_tent(u: FloatLike, radius: FloatLike) -> Array:
     Samples in (-r, r), density `tent_pdf(x, r)`. [same unit as `radius`]
 
     ??? cite "References"
-        `Pharr2023` §2.3.1 (`SampleTent`); thesis ch. 5 and eq. 2.31.
+        `Pharr2023` §2.3.1 (`SampleTent`).
+        Thesis ch. 5 and eq. 2.31.
     """
     u = _u(u)
     r = as_float_array(radius, "radius")
@@ -838,7 +866,8 @@ def tent_pdf(x: FloatLike, radius: FloatLike) -> Array:
     Density with respect to `dx`. [1/unit of x]
 
     ??? cite "References"
-        `Pharr2023` §2.3.1; thesis ch. 5.
+        `Pharr2023` §2.3.1.
+        Thesis ch. 5.
     """
     x = as_float_array(x, "x")
     r = as_float_array(radius, "radius")
@@ -859,7 +888,8 @@ def invert_tent_sample(x: FloatLike, radius: FloatLike) -> Array:
     Variates in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §2.3.1 (`InvertTentSample`); thesis ch. 5.
+        `Pharr2023` §2.3.1 (`InvertTentSample`).
+        Thesis ch. 5.
     """
     x = as_float_array(x, "x")
     r = as_float_array(radius, "radius")
@@ -883,7 +913,8 @@ def sample_exponential(u: FloatLike, a: FloatLike) -> Array:
     Samples >= 0. [1/unit of `a`]
 
     ??? cite "References"
-        `Pharr2023` §A.4.2 (`SampleExponential`); thesis ch. 5.
+        `Pharr2023` §A.4.2 (`SampleExponential`).
+        Thesis ch. 5.
     """
     u = _u(u)
     a = as_float_array(a, "a")
@@ -904,7 +935,8 @@ def exponential_pdf(x: FloatLike, a: FloatLike) -> Array:
     Density with respect to `dx`. [1/unit of x]
 
     ??? cite "References"
-        `Pharr2023` §A.4.2; thesis ch. 5.
+        `Pharr2023` §A.4.2.
+        Thesis ch. 5.
     """
     x = as_float_array(x, "x")
     a = as_float_array(a, "a")
@@ -925,7 +957,8 @@ def invert_exponential_sample(x: FloatLike, a: FloatLike) -> Array:
     Variates in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §A.4.2; thesis ch. 5.
+        `Pharr2023` §A.4.2.
+        Thesis ch. 5.
     """
     x = as_float_array(x, "x")
     a = as_float_array(a, "a")
@@ -965,7 +998,8 @@ def sample_visible_wavelengths(u: FloatLike) -> Array:
     Wavelengths in [360, 830]. [nm]
 
     ??? cite "References"
-        `Pharr2023` §4.6.2 (`SampleVisibleWavelengths`); `Radziszewski2009`; thesis ch. 5.
+        `Pharr2023` §4.6.2 (`SampleVisibleWavelengths`); `Radziszewski2009`.
+        Thesis ch. 5.
     """
     u = _u(u)
     t = _VIS_T0 - (_VIS_T0 + _VIS_T1) * u
@@ -986,7 +1020,8 @@ def visible_wavelengths_pdf(wavelength_nm: FloatLike) -> Array:
     Density per nanometre; 0 outside [360, 830] nm. [nm^-1]
 
     ??? cite "References"
-        `Pharr2023` §4.6.2 (`VisibleWavelengthsPDF`); thesis ch. 5.
+        `Pharr2023` §4.6.2 (`VisibleWavelengthsPDF`).
+        Thesis ch. 5.
     """
     lam = as_float_array(wavelength_nm, "wavelength_nm")
     inside = (lam >= VISIBLE_MIN_NM) & (lam <= VISIBLE_MAX_NM)
@@ -1006,7 +1041,8 @@ def invert_visible_wavelengths_sample(wavelength_nm: FloatLike) -> Array:
     Variates in [0, 1). [dimensionless]
 
     ??? cite "References"
-        `Pharr2023` §4.6.2; thesis ch. 5.
+        `Pharr2023` §4.6.2.
+        Thesis ch. 5.
     """
     lam = as_float_array(wavelength_nm, "wavelength_nm")
     return _frac_to_unit((_VIS_T0 - jnp.tanh(_VIS_K * (_VIS_MU - lam))) / (_VIS_T0 + _VIS_T1))
