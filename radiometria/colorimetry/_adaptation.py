@@ -52,6 +52,8 @@ def matrix_chromatic_adaptation(
 
     ??? cite "References"
         `Fairchild2013` chapter 9; `Lam1985`; `Moroney2002`; `Li2017`.
+
+    Arguments: whites (..., 3) [dimensionless, Y = 1]. Returns (..., 3, 3) [dimensionless].
     """
     w = check_last_axis(as_float_array(XYZ_w, "XYZ_w"), "XYZ_w", 3)
     wr = check_last_axis(as_float_array(XYZ_wr, "XYZ_wr"), "XYZ_wr", 3)

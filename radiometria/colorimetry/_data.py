@@ -95,6 +95,9 @@ class TabulatedSpectra(eqx.Module):
 
     Calling the object interpolates linearly: `spectra(wavelength_nm)` has shape
     `wavelength_nm.shape` (one spectrum) or `wavelength_nm.shape + (k,)`.
+
+    ??? cite "References"
+        `CIE2018` (the tabulated CMFs and illuminants); provenance in the module docstring.
     """
 
     wavelengths_nm: Float[Array, " n"]

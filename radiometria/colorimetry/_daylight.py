@@ -41,6 +41,8 @@ def daylight_M1_M2(
 
     ??? cite "References"
         `CIE2018` section 4.1.2 (eq. 4.10-4.11).
+
+    Arguments: `xy` (..., 2) [dimensionless]. Returns (..., 2) [dimensionless].
     """
     xy = as_float_array(xy, "xy")
     x, y = xy[..., 0], xy[..., 1]

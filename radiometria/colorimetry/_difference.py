@@ -42,6 +42,8 @@ def delta_E_CIE1976(
 
     ??? cite "References"
         `CIE2018` section 8.2.3.
+
+    Arguments: `Lab_1`, `Lab_2` (..., 3) [dimensionless]. Returns (...) [CIELAB units].
     """
     a, b = _pair(Lab_1, Lab_2)
     d = a - b
@@ -61,6 +63,8 @@ def delta_E_CIE1994(
 
     ??? cite "References"
         `CIE1995` (CIE 116-1995).
+
+    Arguments: `Lab_1`, `Lab_2` (..., 3) [dimensionless]. Returns (...) [CIELAB units].
     """
     a, b = _pair(Lab_1, Lab_2)
     k_1, k_2, k_L = (0.048, 0.014, 2.0) if textiles else (0.045, 0.015, 1.0)
@@ -90,6 +94,8 @@ def delta_E_CIE2000(
 
     ??? cite "References"
         `CIE2001` (CIE 142-2001); `Sharma2005`.
+
+    Arguments: `Lab_1`, `Lab_2` (..., 3) [dimensionless]. Returns (...) [CIELAB units].
     """
     a, b = _pair(Lab_1, Lab_2)
     L_1, a_1, b_1 = a[..., 0], a[..., 1], a[..., 2]

@@ -85,6 +85,9 @@ def Lab_to_XYZ(Lab: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array
 
     ??? cite "References"
         `CIE2018` section 8.2.1.
+
+    Arguments: `Lab` (..., 3) [dimensionless]; `white_XYZ` (..., 3) [dimensionless, Y = 1].
+    Returns XYZ (..., 3) in the scale of the white [dimensionless].
     """
     Lab = _vec3(Lab, "Lab")
     Lab, w = jnp.broadcast_arrays(Lab, _white(white_XYZ, Lab.dtype))
@@ -120,7 +123,13 @@ def Lab_to_LCh(Lab: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
 
 
 def LCh_to_Lab(LCh: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
-    """CIELCh -> CIELAB: a* = C cos h, b* = C sin h (h in degrees)."""
+    """CIELCh -> CIELAB: a* = C cos h, b* = C sin h (h in degrees).
+
+    Arguments and result: L* [dimensionless], C* [dimensionless], h [degrees].
+
+    ??? cite "References"
+        `CIE2018` section 8.2.2.
+    """
     LCh = _vec3(LCh, "LCh")
     L, C, h = LCh[..., 0], LCh[..., 1], jnp.radians(LCh[..., 2])
     return jnp.stack([L, C * jnp.cos(h), C * jnp.sin(h)], axis=-1)
@@ -146,7 +155,11 @@ def XYZ_to_UCS_uv(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 2"]
 
 
 def xy_to_UCS_uv(xy: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
-    """xy -> CIE 1960 uv: u = 4x/(-2x+12y+3), v = 6y/(-2x+12y+3). [dimensionless]"""
+    """xy -> CIE 1960 uv: u = 4x/(-2x+12y+3), v = 6y/(-2x+12y+3). [dimensionless]
+
+    ??? cite "References"
+        `Wyszecki2000` section 3.3.9.
+    """
     xy = check_last_axis(as_float_array(xy, "xy"), "xy", 2)
     x, y = xy[..., 0], xy[..., 1]
     d = -2.0 * x + 12.0 * y + 3.0
@@ -154,7 +167,11 @@ def xy_to_UCS_uv(xy: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
 
 
 def UCS_uv_to_xy(uv: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
-    """CIE 1960 uv -> xy: x = 3u/(2u-8v+4), y = 2v/(2u-8v+4). [dimensionless]"""
+    """CIE 1960 uv -> xy: x = 3u/(2u-8v+4), y = 2v/(2u-8v+4). [dimensionless]
+
+    ??? cite "References"
+        `Wyszecki2000` section 3.3.9.
+    """
     uv = check_last_axis(as_float_array(uv, "uv"), "uv", 2)
     u, v = uv[..., 0], uv[..., 1]
     d = 2.0 * u - 8.0 * v + 4.0
@@ -166,6 +183,8 @@ def XYZ_to_Luv_uv(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 2"]
 
     ??? cite "References"
         `CIE2018` section 8.1.
+
+    Arguments: `XYZ` (..., 3) [dimensionless]. Returns u'v' (..., 2) [dimensionless].
     """
     XYZ = _vec3(XYZ, "XYZ")
     X, Y, Z = XYZ[..., 0], XYZ[..., 1], XYZ[..., 2]
@@ -174,7 +193,11 @@ def XYZ_to_Luv_uv(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 2"]
 
 
 def xy_to_Luv_uv(xy: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
-    """xy -> CIE 1976 u'v': u' = 4x/(-2x+12y+3), v' = 9y/(-2x+12y+3). [dimensionless]"""
+    """xy -> CIE 1976 u'v': u' = 4x/(-2x+12y+3), v' = 9y/(-2x+12y+3). [dimensionless]
+
+    ??? cite "References"
+        `CIE2018` section 8.1.
+    """
     xy = check_last_axis(as_float_array(xy, "xy"), "xy", 2)
     x, y = xy[..., 0], xy[..., 1]
     d = -2.0 * x + 12.0 * y + 3.0
@@ -182,7 +205,11 @@ def xy_to_Luv_uv(xy: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
 
 
 def Luv_uv_to_xy(uv: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
-    """CIE 1976 u'v' -> xy: x = 9u'/(6u'-16v'+12), y = 4v'/(6u'-16v'+12). [dimensionless]"""
+    """CIE 1976 u'v' -> xy: x = 9u'/(6u'-16v'+12), y = 4v'/(6u'-16v'+12). [dimensionless]
+
+    ??? cite "References"
+        `CIE2018` section 8.1.
+    """
     uv = check_last_axis(as_float_array(uv, "uv"), "uv", 2)
     u, v = uv[..., 0], uv[..., 1]
     d = 6.0 * u - 16.0 * v + 12.0
@@ -198,10 +225,19 @@ def CIE_RGB_to_XYZ(RGB: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"
 
     ??? cite "References"
         `CIE1932`; `Wyszecki2000` section 3.3.3; `Broadbent2009`.
+
+    Arguments: `RGB` (..., 3) [luminance units, cd m^-2 for a radiance]. Returns XYZ (..., 3)
+    [cd m^-2 for a radiance].
     """
     return _matmul(MATRIX_CIE_RGB_TO_XYZ, _vec3(RGB, "RGB"))
 
 
 def XYZ_to_CIE_RGB(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
-    """CIE 1931 XYZ -> CIE 1931 RGB, the inverse of `CIE_RGB_to_XYZ` (thesis eq. 2.11)."""
+    """CIE 1931 XYZ -> CIE 1931 RGB, the inverse of `CIE_RGB_to_XYZ` (thesis eq. 2.11).
+
+    Arguments: `XYZ` (..., 3) [cd m^-2 for a radiance]. Returns CIE RGB (..., 3) [same unit].
+
+    !!! note "Thesis"
+        Eq. 2.11, section 2.2.
+    """
     return _matmul(MATRIX_XYZ_TO_CIE_RGB, _vec3(XYZ, "XYZ"))

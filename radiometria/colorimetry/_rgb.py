@@ -52,6 +52,8 @@ def srgb_eotf(V: ArrayLike) -> Array:
 
     ??? cite "References"
         `IEC1999` (IEC 61966-2-1).
+
+    Arguments: `V` encoded value [dimensionless]. Returns L [dimensionless, linear].
     """
     V = as_float_array(V, "V")
     big = V > 0.04045
@@ -64,6 +66,8 @@ def bt709_oetf(L: ArrayLike) -> Array:
 
     ??? cite "References"
         `ITU2015a` (BT.709-6), `ITU2015b` (BT.2020-2).
+
+    Arguments: `L` scene-linear value [dimensionless]. Returns the signal V [dimensionless].
     """
     L = as_float_array(L, "L")
     big = L >= 0.018
@@ -76,6 +80,11 @@ def bt709_oetf_inverse(V: ArrayLike) -> Array:
 
     The threshold is the power segment at L = 0.018 (the two segments of the rounded BT.709
     constants differ by 2e-4 there), as in colour-science.
+
+    Arguments: `V` signal [dimensionless]. Returns L [dimensionless].
+
+    ??? cite "References"
+        `ITU2015a`, `ITU2015b`.
     """
     V = as_float_array(V, "V")
     big = V >= 1.099 * 0.018**0.45 - 0.099
@@ -83,24 +92,45 @@ def bt709_oetf_inverse(V: ArrayLike) -> Array:
 
 
 def gamma_encoding(L: ArrayLike, gamma: float) -> Array:
-    """Pure power-law encoding V = sign(L)|L|^(1/gamma) (mirrored for negative values)."""
+    """Pure power-law encoding V = sign(L)|L|^(1/gamma) (mirrored for negative values).
+
+    Arguments: `L` linear value [dimensionless]; `gamma` exponent [dimensionless].
+
+    ??? cite "References"
+        Thesis section 2.2.2 (v_in = A v_out^gamma); `IEC1999`.
+    """
     return _spow(as_float_array(L, "L"), 1.0 / gamma)
 
 
 def gamma_decoding(V: ArrayLike, gamma: float) -> Array:
-    """Pure power-law decoding L = sign(V)|V|^gamma (mirrored for negative values)."""
+    """Pure power-law decoding L = sign(V)|V|^gamma (mirrored for negative values).
+
+    Arguments: `V` encoded value [dimensionless]; `gamma` exponent [dimensionless].
+
+    ??? cite "References"
+        `IEC1999` (the pure-power approximation it replaces); thesis section 2.2.2.
+    """
     return _spow(as_float_array(V, "V"), gamma)
 
 
 def romm_encoding(L: ArrayLike) -> Array:
-    """ProPhoto (ROMM RGB) encoding: 16 L below 1/512, else L^(1/1.8). `ANSI2005`/ISO 22028-2."""
+    """ProPhoto (ROMM RGB) encoding: 16 L below 1/512, else L^(1/1.8). `ANSI2005`/ISO 22028-2.
+
+    Arguments: `L` [dimensionless]. Returns V [dimensionless].
+    """
     L = as_float_array(L, "L")
     big = L >= 1.0 / 512.0
     return jnp.where(big, jnp.where(big, L, 1.0) ** (1.0 / 1.8), 16.0 * L)
 
 
 def romm_decoding(V: ArrayLike) -> Array:
-    """ProPhoto (ROMM RGB) decoding: V/16 below 1/32, else V^1.8."""
+    """ProPhoto (ROMM RGB) decoding: V/16 below 1/32, else V^1.8.
+
+    Arguments: `V` [dimensionless]. Returns L [dimensionless].
+
+    ??? cite "References"
+        `ANSI2005`.
+    """
     V = as_float_array(V, "V")
     big = V >= 16.0 / 512.0
     return jnp.where(big, jnp.where(big, V, 1.0) ** 1.8, V / 16.0)
@@ -133,6 +163,9 @@ def normalised_primary_matrix(primaries, whitepoint):
 
     ??? cite "References"
         `SMPTE1993` (SMPTE RP 177-1993).
+
+    Arguments: `primaries` (3, 2), `whitepoint` (2,) xy [dimensionless]. Returns (3, 3)
+    [dimensionless].
     """
     use_np = not any(isinstance(a, jnp.ndarray) for a in (primaries, whitepoint))
     xp = np if use_np else jnp
@@ -162,6 +195,9 @@ class RGBColourspace(eqx.Module):
     - `cctf`: transfer-function name (static): "sRGB", "BT.709", "Adobe RGB (1998)",
         "gamma 2.2", "ROMM" or "linear".
     - `matrix_RGB_to_XYZ`, `matrix_XYZ_to_RGB`: (3, 3), white Y = 1.
+
+    ??? cite "References"
+        `SMPTE1993` (derivation); thesis section 2.2.2 (sRGB, table 2.2).
     """
 
     name: str = eqx.field(static=True)
@@ -300,6 +336,11 @@ def get_colourspace(colourspace) -> RGBColourspace:
     Names: "sRGB", "Display P3", "ITU-R BT.2020", "ACES2065-1", "ACEScg", "ProPhoto RGB",
     "Adobe RGB (1998)"; aliases "Rec.2020", "BT.2020", "P3-D65", "ACES", "ProPhoto",
     "ROMM RGB", "Adobe RGB". An unknown name raises `ValueError` listing the valid ones.
+
+    Arguments: `colourspace` name [str] or `RGBColourspace`.
+
+    ??? cite "References"
+        `IEC1999`, `ITU2015b`, `SMPTE1993`, `ANSI2005`.
     """
     if isinstance(colourspace, RGBColourspace):
         return colourspace
@@ -392,6 +433,8 @@ def XYZ_to_RGB(
 
     ??? cite "References"
         `SMPTE1993`; `Fairchild2013` chapter 9.
+
+    Returns RGB (..., 3) [dimensionless, linear unless `apply_cctf_encoding`].
     """
     cs = get_colourspace(colourspace)
     XYZ = check_last_axis(as_float_array(XYZ, "XYZ"), "XYZ", 3)
@@ -406,7 +449,13 @@ def XYZ_to_RGB(
 def matrix_RGB_to_RGB(
     input_colourspace, output_colourspace, chromatic_adaptation_transform: str | None = "CAT02"
 ):
-    """The 3x3 matrix of `RGB_to_RGB` (linear), adapting between the two whites."""
+    """The 3x3 matrix of `RGB_to_RGB` (linear), adapting between the two whites.
+
+    Returns the (3, 3) matrix [dimensionless].
+
+    ??? cite "References"
+        `SMPTE1993`; `Fairchild2013` chapter 9.
+    """
     a = get_colourspace(input_colourspace)
     b = get_colourspace(output_colourspace)
     M = a.matrix_RGB_to_XYZ
@@ -440,6 +489,8 @@ def RGB_to_RGB(
 
     ??? cite "References"
         `SMPTE1993`; `Fairchild2013` chapter 9.
+
+    Returns RGB (..., 3) of the output space [dimensionless, linear unless encoded].
     """
     a = get_colourspace(input_colourspace)
     b = get_colourspace(output_colourspace)

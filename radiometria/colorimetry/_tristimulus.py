@@ -223,6 +223,9 @@ def xyY_to_XYZ(xyY: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
 
     ??? cite "References"
         `CIE2018` section 7.3.
+
+    Arguments: `xyY` (..., 3) [x, y dimensionless; Y in the caller's scale]. Returns XYZ (..., 3)
+    [the scale of Y].
     """
     xyY = check_last_axis(as_float_array(xyY, "xyY"), "xyY", 3)
     x, y, Y = xyY[..., 0], xyY[..., 1], xyY[..., 2]
@@ -232,7 +235,13 @@ def xyY_to_XYZ(xyY: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
 
 
 def xy_to_xyY(xy: Float[ArrayLike, "*batch 2"], Y: ArrayLike = 1.0) -> Float[Array, "*batch 3"]:
-    """Chromaticity xy -> xyY with luminance factor `Y` (default 1). [dimensionless]"""
+    """Chromaticity xy -> xyY with luminance factor `Y` (default 1). [dimensionless]
+
+    Arguments: `xy` (..., 2) [dimensionless]; `Y` [the caller's scale].
+
+    !!! note "Thesis"
+        Eq. 2.20-2.22, section 2.2.1.
+    """
     xy = check_last_axis(as_float_array(xy, "xy"), "xy", 2)
     Y = jnp.broadcast_to(jnp.asarray(Y, dtype=xy.dtype), xy.shape[:-1])
     return jnp.concatenate([xy, Y[..., None]], axis=-1)
@@ -248,5 +257,11 @@ def xy_to_XYZ(xy: Float[ArrayLike, "*batch 2"], Y: ArrayLike = 1.0) -> Float[Arr
 
 
 def xyY_to_xy(xyY: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 2"]:
-    """xyY -> xy (drops Y)."""
+    """xyY -> xy (drops Y).
+
+    Arguments: `xyY` (..., 3) [dimensionless]. Returns xy (..., 2) [dimensionless].
+
+    !!! note "Thesis"
+        Eq. 2.20-2.21, section 2.2.1.
+    """
     return check_last_axis(as_float_array(xyY, "xyY"), "xyY", 3)[..., :2]

@@ -25,7 +25,6 @@ from ._scene import (
     SceneDescription as SceneDescription,
     SceneError as SceneError,
     load_scene as load_scene,
-    look_at as look_at,
 )
 
 # isort: split

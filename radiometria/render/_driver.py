@@ -131,11 +131,24 @@ class _Config:
     devices: tuple
 
 
-def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
-    """Trace the step's paths of (a device's share of) a tile of pixels.
+def _footprint_radius(cfg: _Config, rfilter) -> int:
+    """Pixels a sample reaches on each side of its own: 0 for filter importance sampling;
+    for splatting, every d with |d| < r + 1/2 (a sample lies inside its pixel)."""
+    if cfg.reconstruction == "importance":
+        return 0
+    return max(math.ceil(float(rfilter.radius) + 0.5) - 1, 0)
 
-    Returns `(raster_xy (n, 2), xyz (n, 3), weight (n,))` for the `n = t k` samples, pixel-major
-    (the `k` passes of a pixel are consecutive); invalid samples have weight 0 and XYZ 0.
+
+def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
+    """Trace the step's paths of (a device's share of) a tile of pixels, and reduce them to
+    per-pixel footprints.
+
+    Returns `(t, F, F, 4)` sums over the step's `k` passes of each pixel: entry `[p, j, i]`
+    is what pixel `p`'s samples add to the pixel at offset `(i - R, j - R)` from it, as
+    `[w X, w Y, w Z, w]` with `w` the filter weight (F = 2R + 1; R = 0 for filter importance
+    sampling, whose samples stay in their pixel). The filters are separable, so a sample's
+    weights are an outer product of two 1D rows, and the sum over a pixel's samples is one
+    small contraction: the scatter into the film then has `t F^2` entries, not `t k F^2`.
     """
     dtype = jnp.float32
     t, k = pixel.shape[0], cfg.passes
@@ -156,7 +169,7 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         offset, weight = kernel.rfilter.sample(u[:, 0:2])
         raster = corner + 0.5 + offset.astype(dtype)
     else:
-        # Splatting (eq. 2.34): uniform positions in the pixel, filter weights at splat time.
+        # Splatting (eq. 2.34): uniform positions in the pixel, filter weights below.
         raster = corner + u[:, 0:2]
         weight = jnp.ones((t * k,), dtype)
     origins, directions = kernel.camera.generate_ray(raster)
@@ -173,7 +186,37 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
     ok = jnp.repeat(valid_pixel, k) & (passes < spp)
     ok = ok & jnp.all(jnp.isfinite(xyz), axis=-1)
-    return raster, jnp.where(ok[:, None], xyz, 0.0), jnp.where(ok, weight.astype(dtype), 0.0)
+    w = jnp.where(ok, weight.astype(dtype), 0.0)
+    values = jnp.concatenate([jnp.where(ok[:, None], xyz, 0.0) * w[:, None], w[:, None]], axis=-1)
+    values = values.reshape(t, k, 4)
+    radius = _footprint_radius(cfg, kernel.rfilter)
+    if radius == 0:
+        return jnp.sum(values, axis=1).reshape(t, 1, 1, 4)
+    d = jnp.arange(-radius, radius + 1, dtype=dtype)
+    # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis.
+    to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
+    f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
+    return jnp.einsum("tkj,tki,tkc->tjic", f1[..., 1], f1[..., 0], values)
+
+
+def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> Film:
+    """Scatter-add `(t, F, F, 4)` footprints of the pixels `pixel` into the film's sums."""
+    radius = (footprints.shape[1] - 1) // 2
+    d = jnp.arange(-radius, radius + 1, dtype=jnp.int32)
+    x = (pixel % width)[:, None, None] + d[None, None, :]
+    y = (pixel // width)[:, None, None] + d[None, :, None]
+    inside = (
+        (x >= 0) & (x < width) & (y >= 0) & (y < height) & (pixel < width * height)[:, None, None]
+    )
+    idx = jnp.where(inside, y * width + x, width * height).reshape(-1)  # out of range: dropped
+    values = footprints.reshape(-1, 4)
+    xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(values[:, :3], mode="drop")
+    weight_sum = film.weight_sum.reshape(-1).at[idx].add(values[:, 3], mode="drop")
+    return eqx.tree_at(
+        lambda f: (f.xyz_sum, f.weight_sum),
+        film,
+        (xyz_sum.reshape(film.xyz_sum.shape), weight_sum.reshape(film.weight_sum.shape)),
+    )
 
 
 def render(
@@ -241,7 +284,8 @@ def render(
         sampling and the weighted pixel estimate); section 2.2 (XYZ, sRGB).
 
     ??? cite "References"
-        `Pharr2023` ch. 5, 13; `Jakob2022`; `Wilkie2014`.
+        `Pharr2023` ch. 5, 8, 13; `Jakob2022`; `Wilkie2014`; `Ernst2006` (filter importance
+        sampling).
     """
     spp = check_positive_int(spp, "spp")
     if max_depth is not None:
@@ -383,8 +427,6 @@ def _compiled_step(cfg: _Config):
         return _STEP_CACHE[cfg]
     from jax.sharding import Mesh, PartitionSpec as P
 
-    from ..camera import splat_samples
-
     mesh = Mesh(np.asarray(cfg.devices), ("pixels",))
     trace = jax.shard_map(
         functools.partial(_trace, cfg=cfg),
@@ -396,22 +438,8 @@ def _compiled_step(cfg: _Config):
 
     @functools.partial(jax.jit, donate_argnums=0)
     def step(film, kernel, key, spp, pass_start, pixel):
-        raster, xyz, weight = trace(kernel, key, spp, pass_start, pixel)
-        if cfg.reconstruction == "splat":
-            return splat_samples(film, raster, xyz, kernel.rfilter, weight)
-        # One entry per pixel (its k samples summed first), so the scatter has no duplicate
-        # indices and its result does not depend on the order of additions; indices past the
-        # image are dropped.
-        k = cfg.passes
-        xyz_sum = jnp.sum((xyz * weight[:, None]).reshape(-1, k, 3), axis=1)
-        w_sum = jnp.sum(weight.reshape(-1, k), axis=1)
-        xyz_acc = film.xyz_sum.reshape(-1, 3).at[pixel].add(xyz_sum, mode="drop")
-        w_acc = film.weight_sum.reshape(-1).at[pixel].add(w_sum, mode="drop")
-        return eqx.tree_at(
-            lambda f: (f.xyz_sum, f.weight_sum),
-            film,
-            (xyz_acc.reshape(film.xyz_sum.shape), w_acc.reshape(film.weight_sum.shape)),
-        )
+        footprints = trace(kernel, key, spp, pass_start, pixel)
+        return _add_footprints(film, pixel, footprints, cfg.width, film.height)
 
     if len(_STEP_CACHE) > 16:
         _STEP_CACHE.clear()

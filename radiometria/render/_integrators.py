@@ -153,7 +153,8 @@ def path_radiance(
         rendering equation, estimated with the methods of chapters 6-7.
 
     ??? cite "References"
-        `Veach1997` ch. 9-10 (MIS, power heuristic); `Pharr2023` §13.4 (`PathIntegrator`);
+        `Veach1997` ch. 9-10 (MIS, power heuristic); `Arvo1990` (Russian roulette);
+        `Pharr2023` §13.4 (`PathIntegrator`); `Wilkie2014` (hero wavelengths);
         `Jakob2022` (Mitsuba 3's `path` integrator: depth and roulette conventions).
     """
     if isinstance(max_depth, bool) or not isinstance(max_depth, int) or max_depth < 1:

@@ -42,8 +42,8 @@ from ._scene import (
     SceneDescription,
     SceneError,
     _assemble,
+    _look_at,
     _Shape,
-    look_at,
 )
 
 __all__ = ["SPHERE_SUBDIVISIONS", "load_mesh", "load_mitsuba_xml"]
@@ -225,7 +225,7 @@ def _transform(ctx: _Ctx, node: _Node) -> np.ndarray:
                 raise ctx.err(op, "the rotation axis is zero") from None
         elif op.tag == "lookat":
             try:
-                t = look_at(
+                t = _look_at(
                     ctx.floats(op, ctx.attr(op, "origin"), 3),
                     ctx.floats(op, ctx.attr(op, "target"), 3),
                     ctx.floats(op, ctx.attr(op, "up", "0, 1, 0"), 3),

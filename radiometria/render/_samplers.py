@@ -5,13 +5,13 @@ key, the pass index `s` and the pixel index `p`, never on how the driver batches
 how many devices it uses, so every batching and sharding gives the same image.
 
 - `"independent"`: a counter-based generator: the 32-bit words of `(p, s, block, seed)` are
-  hashed with `pcg4d` (Jarzynski & Olano 2020), four variates per call, seeded from the
+  hashed with `pcg4d` (`Jarzynski2020`), four variates per call, seeded from the
   `jax.random` key. It costs about eight integer operations per variate, a seventh of
   threefry's, and passes the statistical tests of that paper for structured inputs.
-- `"sobol"`: pbrt-v4's `PaddedSobolSampler`: dimensions are taken in pairs; pair `m` of pass
+- `"sobol"`: pbrt-v4's `PaddedSobolSampler` (`Pharr2023` §8.7): dimensions are taken in pairs; pair `m` of pass
   `s` is point `pi(s)` of the first two Sobol dimensions (a (0, 2)-sequence), where `pi` is a
-  random permutation of the pixel's `spp` sample indices (Kensler 2013), Owen-scrambled
-  (Burley 2020), both seeded by a hash of `(key, p, m)`: each pixel gets an independently
+  random permutation of the pixel's `spp` sample indices (`Kensler2013`), Owen-scrambled
+  (`Burley2020`), both seeded by a hash of `(key, p, m)`: each pixel gets an independently
   scrambled, well stratified 2D point set per pair of dimensions, and the pairs are
   decorrelated from each other.
 """

@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..camera import look_at as _camera_look_at
 from ._mesh import TriangleMesh, _areas, validate_triangles
 
 __all__ = [
@@ -54,7 +55,6 @@ __all__ = [
     "SceneError",
     "BUILTIN_SCENES",
     "load_scene",
-    "look_at",
 ]
 
 MEASURED_LIGHT_OFFSET_MM = 0.1
@@ -356,38 +356,16 @@ def _assemble(
     )
 
 
-def look_at(origin, target, up) -> np.ndarray:
-    """Camera-to-world matrix of a camera at `origin` looking at `target` (Mitsuba convention).
+def _look_at(origin, target, up) -> np.ndarray:
+    """`radiometria.camera.look_at` as a float64 NumPy matrix, for the offline scene loaders.
 
-    Columns: `left = normalize(up x dir)`, `up' = dir x left`, `dir`, `origin`, with
-    `dir = normalize(target - origin)`; camera +z looks along `dir`, +x is the image's left.
-
-    **Arguments:**
-
-    - `origin`, `target`: `(3,)` points. [scene length unit]
-    - `up`: `(3,)` up direction, not parallel to the view direction. [dimensionless]
-
-    **Returns:**
-
-    `(4, 4)` float64 matrix.
-
-    !!! note "Thesis"
-        Section 2.3.1 (camera placement); Mitsuba's `Transform4f.look_at` (`Jakob2022`).
+    Degenerate input (target equal to origin, up parallel to the view) raises `ValueError`.
     """
-    o = np.asarray(origin, dtype=np.float64).reshape(3)
-    d = np.asarray(target, dtype=np.float64).reshape(3) - o
-    u = np.asarray(up, dtype=np.float64).reshape(3)
-    if np.linalg.norm(d) == 0:
-        raise ValueError("look_at: `target` equals `origin`.")
-    d = d / np.linalg.norm(d)
-    left = np.cross(u, d)
-    if np.linalg.norm(left) == 0:
-        raise ValueError("look_at: `up` is parallel to the viewing direction.")
-    left = left / np.linalg.norm(left)
-    new_up = np.cross(d, left)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, new_up, d, o
-    return m
+    o, t, u = (np.asarray(v, dtype=np.float64).reshape(3) for v in (origin, target, up))
+    d = t - o
+    if not np.any(d) or not np.any(np.cross(u, d)):
+        raise ValueError("look_at: `target` equals `origin` or `up` is parallel to the view.")
+    return np.asarray(_camera_look_at(o, t, u), dtype=np.float64)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -485,10 +463,10 @@ def _json_camera(cam: _Json) -> tuple[CameraDescription, tuple[int, int] | None]
         m = cam["to_world"].array((4, 4))
     elif cam.has("position"):
         o = cam["position"].array((3,))
-        m = look_at(o, o + cam["direction"].array((3,)), cam["up"].array((3,)))
+        m = _look_at(o, o + cam["direction"].array((3,)), cam["up"].array((3,)))
     else:
         o = cam["origin"].array((3,))
-        m = look_at(o, o + cam["looks_towards"].array((3,)), cam["up"].array((3,)))
+        m = _look_at(o, o + cam["looks_towards"].array((3,)), cam["up"].array((3,)))
     res = None
     if cam.has("recommended_resolution"):
         w, h = cam["recommended_resolution"].array((2,), dtype=np.int64)

@@ -105,50 +105,35 @@ def sample_hero_wavelengths(u: Float[Array, "*batch"]) -> tuple[Array, Array]:
 SPECTRUM_KINDS = ("albedo", "illuminant", "unbounded")
 
 
-def _sigmoid_polynomial(coeffs, wavelength_nm):
-    x = coeffs[0] * wavelength_nm**2 + coeffs[1] * wavelength_nm + coeffs[2]
-    return 0.5 + x / (2.0 * np.sqrt(1.0 + x * x))
-
-
-def _rgb_coefficients(rgb) -> np.ndarray:
-    # TEMPORARY (helper P): colour-science's Jakob 2019 fit until radiometria.upsampling lands.
-    import colour
-    from colour.recovery.jakob2019 import find_coefficients_Jakob2019
-
-    xyz = colour.RGB_to_XYZ(np.asarray(rgb, float), "sRGB")
-    return np.asarray(find_coefficients_Jakob2019(xyz)[0])
-
-
-def _rgb_albedo(rgb: np.ndarray, grid: np.ndarray) -> np.ndarray:
-    if np.all(rgb == rgb[0]):
-        return np.full(grid.shape, rgb[0])
-    return _sigmoid_polynomial(_rgb_coefficients(rgb), grid)
-
-
-def _d65_unit_luminance(grid) -> np.ndarray:
-    from ..colorimetry import get_cmfs, get_illuminant
-
-    d65 = get_illuminant("D65")
-    cmfs = get_cmfs()
-    s = np.interp(grid, np.asarray(d65.wavelengths_nm), np.asarray(d65.values))
-    ybar = np.interp(grid, np.asarray(cmfs.wavelengths_nm), np.asarray(cmfs.values)[:, 1], 0, 0)
-    return s / (np.trapezoid(s * ybar, grid) / np.trapezoid(ybar, grid))
-
-
 def _rgb_spectrum(rgb: np.ndarray, kind: str, grid: np.ndarray) -> np.ndarray:
+    from ..upsampling import (
+        RGBAlbedoSpectrum,
+        RGBIlluminantSpectrum,
+        RGBUnboundedSpectrum,
+        forward_model,
+        get_lut,
+    )
+
     if np.any(rgb < 0) or not np.all(np.isfinite(rgb)):
         raise ValueError(f"RGB values must be finite and >= 0, got {rgb.tolist()}.")
-    if kind == "albedo":
-        if np.any(rgb > 1):
-            raise ValueError(f"An RGB reflectance must lie in [0, 1], got {rgb.tolist()}.")
-        return _rgb_albedo(rgb, grid)
-    # PBRT's RGBUnboundedSpectrum / RGBIlluminantSpectrum: scale = 2 max(rgb), the bounded
-    # spectrum of rgb / scale, times the scale (and, for light, the D65 SPD with Y = 1).
-    scale = 2.0 * float(rgb.max())
-    if scale == 0.0:
-        return np.zeros(grid.shape)
-    values = scale * _rgb_albedo(rgb / scale, grid)
-    return values * _d65_unit_luminance(grid) if kind == "illuminant" else values
+    if kind == "albedo" and np.any(rgb > 1):
+        raise ValueError(f"An RGB reflectance must lie in [0, 1], got {rgb.tolist()}.")
+    cls = {
+        "albedo": RGBAlbedoSpectrum,
+        "unbounded": RGBUnboundedSpectrum,
+        "illuminant": RGBIlluminantSpectrum,
+    }[kind]
+    # One compiled program per kind (op-by-op dispatch would compile every primitive). The
+    # illuminant's constructor reads the colour space's cached forward model with NumPy, so
+    # that cache is filled outside the trace first.
+    forward_model("sRGB")
+    values = _evaluate_rgb_spectrum(cls, get_lut("sRGB"), jnp.asarray(rgb), jnp.asarray(grid))
+    return np.asarray(values, np.float64)
+
+
+@eqx.filter_jit
+def _evaluate_rgb_spectrum(cls, lut, rgb, grid):
+    return cls(lut, rgb)(grid)
 
 
 def spectrum_values(spec: dict, kind: str) -> np.ndarray:

@@ -57,7 +57,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
-from ._directions import _barrier, _safe_sqrt
+from ._directions import _safe_sqrt
 from ._fresnel import _amplitudes, _check_eta, _check_k, _fr_conductor, _fr_dielectric
 from ._microfacet import TrowbridgeReitzDistribution
 from ._warps import _sample_disk_concentric
@@ -131,12 +131,15 @@ def _safe_div(a: Array, b: Array) -> Array:
     return jnp.where(ok, a / jnp.where(ok, b, 1.0), 0.0)
 
 
-def _normalize3(x: Array, y: Array, z: Array) -> tuple[Array, Array, Array, Array]:
-    """Normalise a vector given by components; returns (x, y, z, ok) with ok False for zero."""
-    n2 = x * x + y * y + z * z
+def _unit_safe(v: Array) -> tuple[Array, Array]:
+    """(v / |v|, |v| > 0) along the last axis; a zero vector stays zero (finite gradients).
+
+    The norm is a reduction over the stacked vector, which on XLA's CPU backend ends a fusion,
+    so the producer of `v` is not recomputed for every component of the result.
+    """
+    n2 = jnp.sum(v * v, axis=-1, keepdims=True)
     ok = n2 > 0
-    inv = jnp.where(ok, 1.0 / jnp.sqrt(jnp.where(ok, n2, 1.0)), 0.0)
-    return x * inv, y * inv, z * inv, ok
+    return jnp.where(ok, v / jnp.sqrt(jnp.where(ok, n2, 1.0)), 0.0), ok[..., 0]
 
 
 def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array]:
@@ -276,7 +279,7 @@ class DiffuseBxDF(AbstractBxDF):
         x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
         # Sample in wo's hemisphere.
         z = jnp.where(wo[..., 2] < 0, -z, z)
-        (wi,) = _barrier(jnp.stack([x, y, z], axis=-1))
+        wi = jnp.stack([x, y, z], axis=-1)
         z = wi[..., 2]
         ok = (wo[..., 2] != 0) & (z != 0)
         s = BSDFSample(
@@ -371,7 +374,7 @@ class OrenNayarBxDF(AbstractBxDF):
             t = jnp.where(dxy > 0, cos_b, 1.0)
             g = (1.0 + sigma * _safe_div(dxy, t)) / (1.0 + (0.5 - 2.0 / (3.0 * np.pi)) * sigma)
         same = wo[..., 2] * wi[..., 2] > 0
-        (g,) = _barrier(jnp.where(same, g, 0.0) * (1.0 / jnp.pi))
+        g = jnp.where(same, g, 0.0) * (1.0 / jnp.pi)
         return g[..., None] * r
 
     def f(self, wo, wi, *, mode: str = "radiance") -> Array:
@@ -390,7 +393,7 @@ class OrenNayarBxDF(AbstractBxDF):
         )
         x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
         z = jnp.where(wo[..., 2] < 0, -z, z)
-        (wi,) = _barrier(jnp.stack([x, y, z], axis=-1))
+        wi = jnp.stack([x, y, z], axis=-1)
         z = wi[..., 2]
         ok = (wo[..., 2] != 0) & (z != 0)
         s = BSDFSample(
@@ -564,7 +567,7 @@ class DielectricBxDF(AbstractBxDF):
         cos_t = _safe_sqrt(1.0 - sin2_t)
         cos_t = jnp.where(cos_o < 0, cos_t, -cos_t)  # opposite side of wo
         wt = jnp.stack([-wo[..., 0] / etap_h, -wo[..., 1] / etap_h, cos_t], axis=-1)
-        wi, R_h, etap_h = _barrier(jnp.where(reflect[..., None], wr, wt), R_h, etap_h)
+        wi = jnp.where(reflect[..., None], wr, wt)
         c = jnp.abs(wi[..., 2])
         if self.dispersion:
             # Every wavelength's own Fresnel term; secondaries end at a transmission.
@@ -650,15 +653,14 @@ class RoughConductorBxDF(AbstractBxDF):
     def _eval(self, wo, wi, d) -> tuple[Array, Array, Array]:
         """Per-sample parts shared by f and pdf: (D G / (4 |cos cos|), |wo . wh|, pdf)."""
         zo, zi = wo[..., 2], wi[..., 2]
-        hx, hy, hz, nonzero = _normalize3(wo[..., 0] + wi[..., 0], wo[..., 1] + wi[..., 1], zo + zi)
+        wh, nonzero = _unit_safe(wo + wi)
         # Face the half vector forward (+z): sample_wm only produces m_z > 0 (D is even).
-        sgn = jnp.where(hz < 0, -1.0, 1.0)
-        wh = jnp.stack([hx * sgn, hy * sgn, hz * sgn], axis=-1)
+        wh = jnp.where(wh[..., 2:3] < 0, -wh, wh)
         dot = jnp.abs(jnp.sum(wo * wh, axis=-1))
         ok = (zo * zi > 0) & nonzero
         v = jnp.where(ok, _safe_div(d.D(wh) * self._G(d, wo, wi), 4.0 * jnp.abs(zo * zi)), 0.0)
         p = jnp.where(ok, _safe_div(d.D_visible(wo, wh), 4.0 * dot), 0.0)
-        return _barrier(v, dot, p)
+        return v, dot, p
 
     def _G(self, d, wo: Array, wi: Array) -> Array:
         return d.G(wo, wi) if self.masking == "height_correlated" else d.G_separable(wo, wi)
@@ -684,7 +686,7 @@ class RoughConductorBxDF(AbstractBxDF):
         d = _distribution(ax, ay)
         wm = d.sample_wm(wo, u2)
         # wi = reflect(wo, wm)   (thesis eq. 3.8)
-        (wi,) = _barrier(2.0 * jnp.sum(wo * wm, axis=-1, keepdims=True) * wm - wo)
+        wi = 2.0 * jnp.sum(wo * wm, axis=-1, keepdims=True) * wm - wo
         ok = wo[..., 2] * wi[..., 2] > 0
         v, dot, pdf = self._eval(wo, wi, d)
         s = BSDFSample(
@@ -768,11 +770,8 @@ class RoughDielectricBxDF(AbstractBxDF):
         zo, zi = wo[..., 2], wi[..., 2]
         reflect = zo * zi > 0
         etap = jnp.where(reflect, 1.0, jnp.where(zo > 0, eta, 1.0 / eta))
-        mx, my, mz, nonzero = _normalize3(
-            wi[..., 0] * etap + wo[..., 0], wi[..., 1] * etap + wo[..., 1], zi * etap + zo
-        )
-        sgn = jnp.where(mz < 0, -1.0, 1.0)
-        wm = jnp.stack([mx * sgn, my * sgn, mz * sgn], axis=-1)
+        wm, nonzero = _unit_safe(wi * etap[..., None] + wo)
+        wm = jnp.where(wm[..., 2:3] < 0, -wm, wm)
         dot_o = jnp.sum(wo * wm, axis=-1)
         dot_i = jnp.sum(wi * wm, axis=-1)
         valid = (zo != 0) & (zi != 0) & nonzero & (dot_i * zi > 0) & (dot_o * zo > 0)
@@ -797,7 +796,6 @@ class RoughDielectricBxDF(AbstractBxDF):
         eta when `dispersion`, else computed once with `eta[..., 0]` and broadcast."""
         if not self.dispersion:
             f, _ = self._eval(wo, wi, d, eta[..., 0], mode, with_pdf=False)
-            (f,) = _barrier(f)
             return jnp.broadcast_to(f[..., None], eta.shape)
         d_l = _distribution(d.alpha_x[..., None], d.alpha_y[..., None])
         wo_l = wo[..., None, :]
@@ -840,7 +838,7 @@ class RoughDielectricBxDF(AbstractBxDF):
         cos_t = _safe_sqrt(jnp.where(tir, 0.0, 1.0 - sin2_t))
         nm = jnp.where(inside[..., None], -wm, wm)
         wt = -wo / etap[..., None] + (c / etap - cos_t)[..., None] * nm
-        wi, reflect, tir = _barrier(jnp.where(reflect[..., None], wr, wt), reflect, tir)
+        wi = jnp.where(reflect[..., None], wr, wt)
         same = wo[..., 2] * wi[..., 2] > 0
         ok = jnp.where(reflect, same, ~tir & ~same & (wi[..., 2] != 0))
         f_h, pdf = self._eval(wo, wi, d, eta_h, mode, with_pdf=True)
@@ -849,7 +847,6 @@ class RoughDielectricBxDF(AbstractBxDF):
             term = ~reflect & _dispersive(eta)
             f = jnp.where(term[..., None], _hero_only(f), f)
         else:
-            f_h, pdf = _barrier(f_h, pdf)
             f = jnp.broadcast_to(f_h[..., None], eta.shape)
             term = jnp.zeros(ok.shape, bool)
         ok = ok & (pdf > 0)

@@ -220,10 +220,10 @@ def lm_solve(
     lab_t: Array,
     m: ModelArrays,
     max_steps,
-    tolerance: float,
+    tolerance,
     *,
-    min_steps: int = 1,
-    allowed_fraction: float = 0.0,
+    min_steps=1,
+    allowed_fraction=0.0,
     chunk: int | None = None,
 ) -> tuple[Array, LMState]:
     """`lm_step`s until at most `allowed_fraction` of the rows miss `tolerance` (a residual

@@ -574,7 +574,7 @@ def fit_lut(
     chunk = min(check_positive_int(chunk, "chunk"), -(-n_cols // n_dev))
     blocks_per_call = check_positive_int(blocks_per_call, "blocks_per_call")
     mesh = sharding = None
-    if n_dev > 1:
+    if devices is not None:  # also for one device: the sharded code path, testable anywhere
         from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 
         mesh = Mesh(np.asarray(devices), ("columns",))

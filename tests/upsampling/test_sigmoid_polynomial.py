@@ -29,9 +29,13 @@ def test_sigmoid_jakob2019_limits_and_tail_precision():
 
 
 def test_sigmoid_jakob2019_grad():
-    g = jax.vmap(jax.grad(up.sigmoid_jakob2019))(jnp.array([-jnp.inf, -1e30, -3.0, 0.0, 2.0, 1e30, jnp.inf]))
+    g = jax.vmap(jax.grad(up.sigmoid_jakob2019))(
+        jnp.array([-jnp.inf, -1e30, -3.0, 0.0, 2.0, 1e30, jnp.inf])
+    )
     assert np.all(np.isfinite(np.asarray(g)))
-    np.testing.assert_allclose(np.asarray(g)[2:5], 0.5 * (1 + np.array([9.0, 0.0, 4.0])) ** -1.5, rtol=1e-13)
+    np.testing.assert_allclose(
+        np.asarray(g)[2:5], 0.5 * (1 + np.array([9.0, 0.0, 4.0])) ** -1.5, rtol=1e-13
+    )
     check_grads(up.sigmoid_jakob2019, (jnp.array([-2.0, 0.3, 5.0]),), order=2)
 
 
@@ -39,14 +43,20 @@ def test_sigmoid_polynomial_thesis_coefficients():
     wl = np.linspace(360.0, 830.0, 48)
     x = (THESIS[0] * wl + THESIS[1]) * wl + THESIS[2]
     ref = 0.5 + x / (2 * np.sqrt(1 + x * x))
-    np.testing.assert_allclose(np.asarray(up.sigmoid_polynomial_jakob2019(THESIS, wl)), ref, rtol=1e-13)
-    np.testing.assert_allclose(np.asarray(up.SigmoidPolynomialSpectrum(THESIS)(wl)), ref, rtol=1e-13)
+    np.testing.assert_allclose(
+        np.asarray(up.sigmoid_polynomial_jakob2019(THESIS, wl)), ref, rtol=1e-13
+    )
+    np.testing.assert_allclose(
+        np.asarray(up.SigmoidPolynomialSpectrum(THESIS)(wl)), ref, rtol=1e-13
+    )
 
 
 def test_coefficient_conversion_roundtrip():
     c = np.random.default_rng(0).normal(size=(50, 3)) * np.array([100.0, 100.0, 10.0])
     nm = up.normalised_to_nm_coefficients(c)
-    np.testing.assert_allclose(np.asarray(up.nm_to_normalised_coefficients(nm)), c, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(
+        np.asarray(up.nm_to_normalised_coefficients(nm)), c, rtol=1e-9, atol=1e-9
+    )
     wl = np.linspace(360.0, 830.0, 11)
     lam = (wl - 360.0) / 470.0
     p_norm = (c[:, :1] * lam + c[:, 1:2]) * lam + c[:, 2:]
@@ -68,7 +78,9 @@ def test_spectrum_batch_shapes():
 def test_spectrum_jit_vmap_grad():
     spec = up.SigmoidPolynomialSpectrum(THESIS)
     wl = jnp.linspace(380.0, 780.0, 9)
-    np.testing.assert_allclose(np.asarray(jax.jit(lambda s, w: s(w))(spec, wl)), np.asarray(spec(wl)))
+    np.testing.assert_allclose(
+        np.asarray(jax.jit(lambda s, w: s(w))(spec, wl)), np.asarray(spec(wl))
+    )
     batch = up.SigmoidPolynomialSpectrum(np.tile(THESIS, (3, 1)))
     v = jax.vmap(lambda c: up.SigmoidPolynomialSpectrum(c)(wl))(batch.coeffs)
     np.testing.assert_allclose(np.asarray(v), np.asarray(batch(wl)))
