@@ -30,6 +30,7 @@ same way): lookups of white itself take the exact grey path.
 """
 
 import time
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -203,7 +204,7 @@ class LUTFitResult(eqx.Module):
 
     lut: RGBToSpectrumLUT
     residual: Float[Array, "3 res res res"]
-    result: optx.RESULTS
+    result: Any  # an optimistix-style RESULTS item array (`RESULTS` below)
     exact: Array
     tolerance: float = eqx.field(static=True)
     num_repaired: int = eqx.field(static=True)
