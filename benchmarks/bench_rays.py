@@ -9,7 +9,12 @@ compiles), through Embree (`embreex`, `pip install embreex`, a benchmark-only de
 single-threaded here; `--all-cores` lets XLA use every core. The best of `--repeats` runs is
 reported.
 
+`--cornell` first times the brute-force queries on the 36-triangle Cornell box (what the
+renderer uses for scenes of <= 64 triangles): rays with origins uniform in the room's box and
+uniform directions, closest-hit and any-hit, under `jax.jit` (no eager padding), warm.
+
     .venv/bin/python benchmarks/bench_rays.py [--subdivisions 3 5 6 8] [--rays 262144]
+    .venv/bin/python benchmarks/bench_rays.py --cornell --all-cores --subdivisions
 """
 
 import argparse
@@ -30,13 +35,44 @@ def _best_time(fn, repeats: int) -> float:
     return best
 
 
+def _cornell(args, n: int, cores: str) -> None:
+    import jax
+    import jax.numpy as jnp
+
+    from radiometria.render import (
+        TriangleMesh,
+        intersect_brute_force_any,
+        intersect_brute_force_closest,
+        load_scene,
+    )
+
+    scene = load_scene("cornell-box")
+    v = scene.vertices.astype(np.float32)
+    mesh = TriangleMesh(jnp.asarray(v), scene.faces)
+    rng = np.random.default_rng(1)
+    o = jnp.asarray(rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32))
+    d = jnp.asarray(rng.normal(size=(n, 3)).astype(np.float32))
+    tmax = jnp.full(n, jnp.inf, jnp.float32)
+    closest = jax.jit(intersect_brute_force_closest)
+    any_hit = jax.jit(intersect_brute_force_any)
+    t_c = _best_time(lambda: closest(mesh, o, d, tmax).t.block_until_ready(), args.repeats)
+    t_a = _best_time(lambda: any_hit(mesh, o, d, tmax).block_until_ready(), args.repeats)
+    print(
+        f"Cornell box, {len(scene.faces)} triangles, brute force, {n} rays, float32, {cores}: "
+        f"closest {n / t_c / 1e6:.2f} Mray/s, any {n / t_a / 1e6:.2f} Mray/s"
+    )
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--subdivisions", type=int, nargs="+", default=[3, 5, 6, 8])
+    parser.add_argument("--subdivisions", type=int, nargs="*", default=[3, 5, 6, 8])
     parser.add_argument("--rays", type=int, default=1 << 18)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--brute-max", type=int, default=20480, help="largest mesh for brute force")
     parser.add_argument("--all-cores", action="store_true", help="do not pin to one core")
+    parser.add_argument(
+        "--cornell", action="store_true", help="time brute force on the Cornell box"
+    )
     args = parser.parse_args(argv)
     if not args.all_cores and hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})  # before JAX starts threads
@@ -73,6 +109,8 @@ def main(argv=None) -> int:
     cores = "all cores" if args.all_cores else "1 core"
     platform = jax.devices()[0].platform
     print(f"{n} incoherent rays, float32, {cores}, jax {jax.__version__} on {platform}")
+    if args.cornell:
+        _cornell(args, n, cores)
     header = (
         f"{'triangles':>10} {'build s':>8} {'depth':>5} {'closest Mray/s':>14} {'any Mray/s':>10} "
         f"{'Embree Mray/s':>13} {'ours/Embree':>11} {'brute Mray/s':>12} {'hit %':>6}"

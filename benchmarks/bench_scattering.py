@@ -173,9 +173,12 @@ def main(argv=None) -> int:
 
     import jax
 
-    print(f"# radiometria.scattering vs Mitsuba 3 ({variant}); jax {jax.__version__} on "
-          f"{jax.devices()[0].platform}, float32; {n:.0e} directions in batches of {args.batch:.0e};"
-          f" best of {args.repeats}; libLLVM: {os.environ.get('DRJIT_LIBLLVM_PATH')}")  # fmt: skip
+    platform = jax.devices()[0].platform
+    print(
+        f"# radiometria.scattering vs Mitsuba 3 ({variant}); jax {jax.__version__} on {platform},"
+        f" float32; {n:.0e} directions in batches of {args.batch:.0e}; best of {args.repeats};"
+        f" libLLVM: {os.environ.get('DRJIT_LIBLLVM_PATH')}"
+    )
     print(f"{'bxdf':<16} {'ours [M/s]':>11} {'mitsuba [M/s]':>14} {'ours/mitsuba':>13}")
     for case in args.cases:
         t_ours = bench_ours(case, batches, args.repeats)

@@ -96,15 +96,16 @@ class _Plan:
 
 
 def _plan(n_pixels: int, spp: int, batch: int, n_devices: int) -> _Plan:
+    """Tiles of pixels x passes per step for `spp` samples of `n_pixels` pixels."""
     # Tiles are multiples of 128 pixels where possible (so 1, 2, 4, ..., 128 devices share
     # one layout and render bit-identical images), and of the device count in any case.
     quantum = math.lcm(128, n_devices) if n_pixels >= 128 else n_devices
     tile = min(batch, n_pixels)
     tile = max(quantum, -(-tile // quantum) * quantum)
-    passes = max(1, min(spp, batch // tile))
-    n_groups = -(-spp // passes)
-    passes = -(-spp // n_groups)  # balance the groups: fewer wasted passes in the last one
-    return _Plan(n_pixels, tile, passes, -(-n_pixels // tile), n_groups)
+    # The passes per step do not depend on spp, so one compiled step serves every sample
+    # count; passes past spp are inactive paths, which the integrator does not trace.
+    passes = max(1, batch // tile)
+    return _Plan(n_pixels, tile, passes, -(-n_pixels // tile), -(-spp // passes))
 
 
 class _Kernel(eqx.Module):
@@ -174,6 +175,7 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         weight = jnp.ones((t * k,), dtype)
     origins, directions = kernel.camera.generate_ray(raster)
     wavelength_nm, pdf = sample_hero_wavelengths(u[:, 2])
+    active = jnp.repeat(valid_pixel, k) & (passes < spp)
     radiance = path_radiance(
         kernel.scene,
         origins.astype(dtype),
@@ -182,10 +184,10 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         bounce_samples,
         max_depth=cfg.max_depth,
         rr_depth=cfg.rr_depth,
+        active=active,
     )
     xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
-    ok = jnp.repeat(valid_pixel, k) & (passes < spp)
-    ok = ok & jnp.all(jnp.isfinite(xyz), axis=-1)
+    ok = active & jnp.all(jnp.isfinite(xyz), axis=-1)
     w = jnp.where(ok, weight.astype(dtype), 0.0)
     values = jnp.concatenate([jnp.where(ok[:, None], xyz, 0.0) * w[:, None], w[:, None]], axis=-1)
     values = values.reshape(t, k, 4)

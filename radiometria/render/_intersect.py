@@ -15,8 +15,10 @@ Ray-box tests follow the robust slab test of Ize (2013): the far distance is enl
 `1 + 2 gamma_3` so rounding never culls a box that a ray grazes.
 
 Layout (the measured fact of `design.md`): every test is written structure-of-arrays, one
-array per coordinate, so XLA fuses it into one loop; the brute-force query broadcasts
-`(rays, 1)` against `(triangles,)` and reduces with one fused min/argmin.
+array per coordinate, so XLA fuses it into one loop. The brute-force query loops over the
+triangles and tests all rays against one triangle per step (a running min; see `_brute_loop`).
+In the brute force, each triangle's corners are first sorted in a global (lexicographic) order,
+so shared edges see identical operands without a per-ray swap.
 """
 
 from typing import NamedTuple
@@ -230,6 +232,50 @@ def _triangles_of(geometry) -> Array:
     raise TypeError(f"expected a BVH or a TriangleMesh, got {type(geometry).__name__}.")
 
 
+def _is_concrete(*trees) -> bool:
+    """True when no leaf is a tracer (an eager call, outside `jit`/`vmap`)."""
+    return not any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(trees))
+
+
+def _bucket(n: int, minimum: int) -> int:
+    """Size bucket for eager calls: a power of two >= `minimum` up to 2^16, then multiples of it.
+
+    Eager calls pad their arrays to the bucket, so that meshes and ray batches of similar
+    sizes share one compiled program (each traversal compile costs seconds).
+    """
+    n = max(n, minimum)
+    if n <= 1 << 16:
+        return 1 << (n - 1).bit_length()
+    return -(-n // (1 << 16)) << 16
+
+
+def _pad_rows(x, rows: int, value):
+    if x.shape[0] == rows:
+        return x
+    x = np.asarray(x)
+    pad = [(0, rows - x.shape[0])] + [(0, 0)] * (x.ndim - 1)
+    return jnp.asarray(np.pad(x, pad, constant_values=value))
+
+
+def _pad_rays(o, d, tmin, tmax):
+    """Pad a ray batch to its bucket; padded rays have an empty interval (`t_max = -inf`)."""
+    m = _bucket(o.shape[0], _MIN_RAYS)
+    return (
+        _pad_rows(o, m, 0),
+        _pad_rows(d, m, 1),
+        _pad_rows(tmin, m, 0),
+        _pad_rows(tmax, m, -np.inf),
+    )
+
+
+def _slice_hit(hit: Hit, n: int) -> Hit:
+    return Hit(t=hit.t[:n], prim=hit.prim[:n], b1=hit.b1[:n], b2=hit.b2[:n])
+
+
+_MIN_RAYS = 1024  # smallest ray bucket of eager calls
+_MIN_TRIANGLES = 64  # smallest triangle bucket of eager calls
+
+
 def intersect_brute_force_closest(
     geometry: BVH | TriangleMesh,
     origins: ArrayLike,
@@ -240,9 +286,10 @@ def intersect_brute_force_closest(
 ) -> Hit:
     """Closest hit of each ray by testing every triangle (for tests and tiny scenes).
 
-    Structure-of-arrays: each coordinate broadcasts `(rays, 1)` against `(triangles,)`, and one
-    fused reduction picks the nearest hit; on an exact tie in `t` the lowest face index wins
-    (the same rule as `intersect_closest`). Cost is O(rays x triangles).
+    A loop over the triangles, each step one fused elementwise test of all rays (one array
+    per coordinate) that updates the running nearest hit; on an exact tie in `t` the lowest
+    face index wins (the same rule as `intersect_closest`). Cost is O(rays x triangles); the
+    fastest query for scenes of a few dozen triangles (the Cornell box).
 
     **Arguments:**
 
@@ -262,33 +309,99 @@ def intersect_brute_force_closest(
     """
     tri = _triangles_of(geometry)
     o, d, tmin, tmax = _check_rays(origins, directions, t_max, tri.dtype, t_min)
+    if _is_concrete(tri, o, d, tmin, tmax):
+        # degenerate padding triangles (all corners 0) are never hit
+        n, tri = o.shape[0], _pad_rows(tri, _bucket(tri.shape[0], _MIN_TRIANGLES), 0)
+        return _slice_hit(_brute_closest(tri, *_pad_rays(o, d, tmin, tmax)), n)
     return _brute_closest(tri, o, d, tmin, tmax)
+
+
+def _lex_less(p, q):
+    """Lexicographic `p < q` of `(x, y, z)` column tuples (a ray-independent vertex order)."""
+    return (p[0] < q[0]) | ((p[0] == q[0]) & ((p[1] < q[1]) | ((p[1] == q[1]) & (p[2] < q[2]))))
+
+
+def _sorted_corners(tri):
+    """`(f, 9)` corners -> `(9, f)` rows `a, b, c`: each triangle's corners sorted by `_lex_less`.
+
+    With the corners of every triangle in one global order, an edge shared by two triangles
+    has the same first and second corner in both, so its edge function is evaluated on the
+    same operands in the same places (bit-identical, whatever fused multiply-adds XLA emits)
+    without the per-ray canonical swap of `_edge`. Sorting permutes the corners, which only
+    flips the common sign of `U, V, W` and `det` (the test accepts both signs) and leaves `t`
+    unchanged.
+    """
+    a, b, c = _columns(tri)
+
+    def swap(p, q):
+        s = _lex_less(q, p)
+        lo = tuple(jnp.where(s, y, x) for x, y in zip(p, q, strict=True))
+        hi = tuple(jnp.where(s, x, y) for x, y in zip(p, q, strict=True))
+        return lo, hi
+
+    a, b = swap(a, b)
+    b, c = swap(b, c)
+    a, b = swap(a, b)
+    return jnp.stack(a + b + c)
+
+
+def _brute_loop(tri, o, d, tmin, tmax, *, any_hit: bool):
+    """Loop over the triangles, each iteration testing every ray against one triangle.
+
+    Each iteration is one fused elementwise kernel over the rays (vectorised and threaded by
+    XLA:CPU), and the running minimum needs no `(rays, triangles)` array and no argmin: with
+    a strict `t < t_best`, exact ties keep the lowest face index. Measured on the 36-triangle
+    Cornell box (float32, 2^18 rays): 3-7x faster than the `(rays, 1) x (triangles,)`
+    broadcast with two fused reductions, whose reduction over the short minor axis XLA:CPU
+    does not vectorise.
+    """
+    ray = _setup_rays(o, d)
+    corners = _sorted_corners(tri)
+    n_tri = tri.shape[0]
+
+    def corner(v):
+        # translate to the ray origin, permute to (kx, ky, kz) and shear onto the +z axis
+        px = _pick(ray.kx0, ray.kx1, v[0], v[1], v[2]) - ray.ox
+        py = _pick(ray.ky0, ray.ky1, v[0], v[1], v[2]) - ray.oy
+        pz = _pick(ray.kz0, ray.kz1, v[0], v[1], v[2]) - ray.oz
+        return px - ray.sx * pz, py - ray.sy * pz, ray.sz * pz
+
+    def body(k, carry):
+        q = corners[:, k]
+        a_x, a_y, a_z = corner(q[0:3])
+        b_x, b_y, b_z = corner(q[3:6])
+        c_x, c_y, c_z = corner(q[6:9])
+        # edge functions, each with its corners in the global (sorted) order
+        e_ab = a_x * b_y - a_y * b_x
+        e_bc = b_x * c_y - b_y * c_x
+        e_ac = a_x * c_y - a_y * c_x
+        u, v, w = -e_bc, e_ac, -e_ab
+        inside = (jnp.minimum(jnp.minimum(u, v), w) >= 0) | (jnp.maximum(jnp.maximum(u, v), w) <= 0)
+        det = u + v + w
+        t = (u * a_z + v * b_z + w * c_z) / jnp.where(det != 0, det, 1.0)
+        if any_hit:
+            return carry | (inside & (det != 0) & (t > tmin) & (t < tmax))
+        t_best, best = carry
+        hit = inside & (det != 0) & (t > tmin) & (t < t_best)
+        return jnp.where(hit, t, t_best), jnp.where(hit, k, best)
+
+    if any_hit:
+        return lax.fori_loop(0, n_tri, body, jnp.zeros(o.shape[0], bool), unroll=4)
+    init = (tmax, jnp.full(o.shape[0], -1, jnp.int32))
+    return lax.fori_loop(0, n_tri, body, init, unroll=4)
 
 
 @jax.jit
 def _brute_closest(tri, o, d, tmin, tmax):
-    ray = _expand(_setup_rays(o, d))
-    v0, v1, v2 = _columns(tri[None])  # (1, f) against the rays' (n, 1)
-
-    def t_all():
-        hit, t, _, _ = _triangle_test(ray, v0, v1, v2, tmin[:, None], tmax[:, None])
-        return jnp.where(hit, t, jnp.inf)
-
-    # Two fused reductions instead of a variadic argmin (which XLA:CPU does not fuse with its
-    # producer, so the (n, f) matrix of t would be written out): the nearest t, then the lowest
-    # index that attains it. Each pass recomputes the tests in registers.
-    t_best = jnp.min(t_all(), axis=1)
-    iota = jnp.arange(tri.shape[0], dtype=jnp.int32)[None, :]
-    best = jnp.min(jnp.where(t_all() == t_best[:, None], iota, tri.shape[0]), axis=1)
-    any_hit = t_best < jnp.inf
-    best = jnp.where(any_hit, best, 0)
-    # recompute the chosen triangle per ray for its barycentrics (no (n, f) temporaries)
-    w0, w1, w2 = _columns(tri[best])
+    t_loop, best = _brute_loop(tri, o, d, tmin, tmax, any_hit=False)
+    any_hit = best >= 0
+    # recompute the chosen triangle per ray for its barycentrics, in the original corner order
+    w0, w1, w2 = _columns(tri[jnp.maximum(best, 0)])
     _, _, b1, b2 = _triangle_test(_setup_rays(o, d), w0, w1, w2, tmin, tmax)
     zero = jnp.zeros_like(b1)
     return Hit(
-        t=t_best,
-        prim=jnp.where(any_hit, best, -1),
+        t=jnp.where(any_hit, t_loop, jnp.inf),
+        prim=best,
         b1=jnp.where(any_hit, b1, zero),
         b2=jnp.where(any_hit, b2, zero),
     )
@@ -321,15 +434,15 @@ def intersect_brute_force_any(
     """
     tri = _triangles_of(geometry)
     o, d, tmin, tmax = _check_rays(origins, directions, t_max, tri.dtype, t_min)
+    if _is_concrete(tri, o, d, tmin, tmax):
+        n, tri = o.shape[0], _pad_rows(tri, _bucket(tri.shape[0], _MIN_TRIANGLES), 0)
+        return _brute_any(tri, *_pad_rays(o, d, tmin, tmax))[:n]
     return _brute_any(tri, o, d, tmin, tmax)
 
 
 @jax.jit
 def _brute_any(tri, o, d, tmin, tmax):
-    ray = _expand(_setup_rays(o, d))
-    v0, v1, v2 = _columns(tri[None])  # (1, f) against the rays' (n, 1)
-    hit, _, _, _ = _triangle_test(ray, v0, v1, v2, tmin[:, None], tmax[:, None])
-    return jnp.any(hit, axis=1)
+    return _brute_loop(tri, o, d, tmin, tmax, any_hit=True)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -569,6 +682,39 @@ def _any(bvh, o, d, tmin, tmax, lanes=_LANES, refill_every=_REFILL_EVERY):
     return hit.prim >= 0
 
 
+def _pad_bvh(bvh: BVH) -> BVH:
+    """The BVH with its arrays padded to size buckets (for eager calls); unreachable rows.
+
+    Large BVHs (more than 2^16 triangles) are returned as they are: copying them on every
+    call would cost more than the compile it saves.
+    """
+    if bvh.triangles.shape[0] > 1 << 16:
+        return bvh
+    n_nodes = _bucket(bvh.node_boxes.shape[0], 32)
+    n_tri = _bucket(bvh.triangles.shape[0], _MIN_TRIANGLES)
+    boxes = np.asarray(bvh.node_boxes)
+    empty_box = np.tile(np.r_[[np.inf] * 3, [-np.inf] * 3], 2).astype(boxes.dtype)
+    boxes = np.concatenate([boxes, np.broadcast_to(empty_box, (n_nodes - len(boxes), 12))])
+    return BVH(
+        node_boxes=jnp.asarray(boxes),
+        node_children=_pad_rows(bvh.node_children, n_nodes, EMPTY),
+        triangles=_pad_rows(bvh.triangles, n_tri, 0),
+        prim_ids=_pad_rows(bvh.prim_ids, n_tri, 0),
+        bounds=bvh.bounds,
+        stack_size=-(-max(bvh.stack_size, 1) // 16) * 16,
+        max_leaf_size=8,
+    )
+
+
+def _query(fn, bvh: BVH, o, d, tmin, tmax):
+    """Run a traversal; eager calls are padded to size buckets and share compiled programs."""
+    if not _is_concrete(bvh, o, d, tmin, tmax):
+        return fn(bvh, o, d, tmin, tmax)
+    out = fn(_pad_bvh(bvh), *_pad_rays(o, d, tmin, tmax))
+    n = o.shape[0]
+    return _slice_hit(out, n) if isinstance(out, Hit) else out[:n]
+
+
 def intersect_closest(
     bvh: BVH,
     origins: ArrayLike,
@@ -604,7 +750,7 @@ def intersect_closest(
     if not isinstance(bvh, BVH):
         raise TypeError(f"`bvh` must be a BVH (see build_bvh), got {type(bvh).__name__}.")
     o, d, tmin, tmax = _check_rays(origins, directions, t_max, bvh.triangles.dtype, t_min)
-    return _closest(bvh, o, d, tmin, tmax)
+    return _query(_closest, bvh, o, d, tmin, tmax)
 
 
 def intersect_any(
@@ -636,4 +782,4 @@ def intersect_any(
     if not isinstance(bvh, BVH):
         raise TypeError(f"`bvh` must be a BVH (see build_bvh), got {type(bvh).__name__}.")
     o, d, tmin, tmax = _check_rays(origins, directions, t_max, bvh.triangles.dtype, t_min)
-    return _any(bvh, o, d, tmin, tmax)
+    return _query(_any, bvh, o, d, tmin, tmax)

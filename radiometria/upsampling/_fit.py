@@ -187,6 +187,19 @@ def lm_init(
     return LMState(c, r, J, cost, jnp.full(cost.shape, mu0, c.dtype))
 
 
+def lm_retarget(s: LMState, lab_old: Array, lab_new: Array, mu0: float = 1e-4) -> LMState:
+    """The state at the same coefficients for a new target colour, without evaluating the model.
+
+    The residual is Lab(model) - Lab(target), so moving the target only shifts it; the
+    Jacobian depends on the coefficients alone. The brightness sweep starts every step this
+    way from the previous step's final state (saving one spectral evaluation per step).
+    """
+    r = s.r + (lab_old - lab_new)
+    cost = jnp.sum(r * r, axis=-1)
+    cost = jnp.where(jnp.isfinite(cost), cost, jnp.inf)
+    return LMState(s.c, r, s.J, cost, jnp.full(cost.shape, mu0, s.c.dtype))
+
+
 def lm_step(s: LMState, lab_t: Array, m: ModelArrays, chunk: int | None = None) -> LMState:
     """One damped Gauss-Newton (Levenberg-Marquardt) step for every row.
 

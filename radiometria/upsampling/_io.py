@@ -125,7 +125,7 @@ def save_lut(lut: RGBToSpectrumLUT, path, *, fit_settings: dict | None = None) -
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".npz", ".coeff"):
-        raise ValueError(f"Unknown table file type {str(path)!r}: use a `.npz` or `.coeff` name.")
+        raise ValueError(f"Unknown table file type {str(path)!r}: use a .npz or .coeff file name.")
     scale, coeffs = _arrays(lut)
     if not (np.all(np.isfinite(scale)) and np.all(np.isfinite(coeffs))):
         raise ValueError(f"Refusing to write {str(path)!r}: the table has non-finite values.")

@@ -49,6 +49,7 @@ from ._fit import (
     grey_coefficients,
     lm_init,
     lm_iterate,
+    lm_retarget,
     lm_solve,
     residual_and_jacobian,
     target_Lab,
@@ -378,13 +379,19 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
     zs, start, node = _sweep_plan(scale_np, k0)
 
     def step(carry, xs):
-        c_prev, c_k0 = carry
+        s_prev, lab_prev, s_k0, lab_k0 = carry
         z, how, is_node = xs
-        c_start = jnp.where(how == 0, 0.0, jnp.where(how == 1, c_prev, c_k0)).astype(dtype)
         lab_t = target_Lab(e * z, m)
+
+        def warm():
+            a = lm_retarget(s_prev, lab_prev, lab_t)
+            b = lm_retarget(s_k0, lab_k0, lab_t)
+            return jax.tree_util.tree_map(lambda u, v: jnp.where(how == 1, u, v), a, b)
+
+        s0 = lax.cond(how == 0, lambda: lm_init(jnp.zeros((n, 3), dtype), lab_t, m), warm)
         limit = jnp.where(how == 0, schedule.n_first, schedule.n_steps)
         n_it, s = lm_solve(
-            lm_init(c_start, lab_t, m),
+            s0,
             lab_t,
             m,
             jnp.where(is_node, limit, schedule.n_sub),
@@ -392,12 +399,16 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
             min_steps=jnp.where(is_node, schedule.min_steps, 1),
             allowed_fraction=schedule.allowed_fraction,
         )
-        c_k0 = jnp.where(how == 0, s.c, c_k0)
-        return (s.c, c_k0), (s.c, jnp.sqrt(s.cost), n_it)
+        first = how == 0
+        s_k0 = jax.tree_util.tree_map(lambda u, v: jnp.where(first, u, v), s, s_k0)
+        lab_k0 = jnp.where(first, lab_t, lab_k0)
+        return (s, lab_t, s_k0, lab_k0), (s.c, jnp.sqrt(s.cost), n_it)
 
-    zeros = jnp.zeros((n, 3), dtype)
+    # A placeholder state for the carry (replaced at the cold start, step 0).
+    zero = jnp.zeros((n, 3), dtype)
+    s_dummy = LMState(zero, zero, jnp.zeros((n, 3, 3), dtype), zero[:, 0], zero[:, 0])
     xs = (jnp.asarray(zs, dtype), jnp.asarray(start), jnp.asarray(node >= 0))
-    _, (cs, rs, its) = lax.scan(step, (zeros, zeros), xs)
+    _, (cs, rs, its) = lax.scan(step, (s_dummy, zero, s_dummy, zero), xs)
     # The node rows, in brightness order 1 .. res-1; row 0 = copy of row 1 (placeholder).
     rows = np.full(res, -1)
     rows[node[node >= 0]] = np.flatnonzero(node >= 0)

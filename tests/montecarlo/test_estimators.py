@@ -32,6 +32,11 @@ def assert_unbiased(estimates: mc.Estimate, exact: float, *, check_variance: boo
         assert 0.6 < ratio < 1.6, f"reported/empirical variance = {ratio:.3f}"
 
 
+def jvmap(fn):
+    """`jit(vmap(fn))`: one compilation instead of one per operation of an eager vmap."""
+    return jax.jit(jax.vmap(fn))
+
+
 def keys(seed=0, r=R):
     return jax.random.split(jax.random.key(seed), r)
 
@@ -45,7 +50,7 @@ def test_estimate_mean_and_confidence_interval():
     assert lo < 3.0 < hi
     assert float(hi - lo) == pytest.approx(2 * 1.959964 * float(est.standard_error), rel=1e-6)
     # Coverage of the 95% interval over replicates.
-    ests = jax.vmap(lambda k: mc.estimate_mean(jax.random.normal(k, (200,))))(keys(1, 400))
+    ests = jvmap(lambda k: mc.estimate_mean(jax.random.normal(k, (200,))))(keys(1, 400))
     lo, hi = ests.confidence_interval(0.95)
     cover = np.mean((np.asarray(lo) < 0) & (np.asarray(hi) > 0))
     assert 0.91 < cover < 0.98
@@ -55,10 +60,10 @@ def test_importance_sampling_unbiased_and_cosine_beats_uniform():
     def est(k, sample, pdf):
         return mc.importance_sampling(radiance_integrand, sample, pdf, 256, u_dim=2, key=k)
 
-    cos = jax.vmap(
+    cos = jvmap(
         lambda k: est(k, mc.sample_cosine_hemisphere, lambda w: mc.cosine_hemisphere_pdf(w[:, 2]))
     )(keys())
-    uni = jax.vmap(lambda k: est(k, mc.sample_uniform_hemisphere, mc.uniform_hemisphere_pdf))(
+    uni = jvmap(lambda k: est(k, mc.sample_uniform_hemisphere, mc.uniform_hemisphere_pdf))(
         keys()
     )
     assert_unbiased(cos, EXACT_HEMI)
@@ -101,7 +106,7 @@ STRATEGIES = [
 
 @pytest.mark.parametrize("heuristic", ["balance", "power"])
 def test_mis_estimate_unbiased(heuristic):
-    ests = jax.vmap(
+    ests = jvmap(
         lambda k: mc.mis_estimate(
             radiance_integrand, STRATEGIES, u_dim=2, key=k, heuristic=heuristic
         )
@@ -112,7 +117,7 @@ def test_mis_estimate_unbiased(heuristic):
 @pytest.mark.parametrize("heuristic", ["balance", "power"])
 def test_one_sample_mis_unbiased(heuristic):
     strategies = [s[:2] for s in STRATEGIES]
-    ests = jax.vmap(
+    ests = jvmap(
         lambda k: mc.one_sample_mis(
             radiance_integrand,
             strategies,
@@ -134,9 +139,9 @@ EXACT_2D = (math.e - 1) / 2
 
 
 def test_stratified_estimate_unbiased_with_less_variance():
-    strat = jax.vmap(lambda k: mc.stratified_estimate(smooth_2d, (8, 8), 4, key=k))(keys(6))
+    strat = jvmap(lambda k: mc.stratified_estimate(smooth_2d, (8, 8), 4, key=k))(keys(6))
     assert_unbiased(strat, EXACT_2D)
-    plain = jax.vmap(lambda k: mc.estimate_mean(smooth_2d(jax.random.uniform(k, (256, 2)))))(
+    plain = jvmap(lambda k: mc.estimate_mean(smooth_2d(jax.random.uniform(k, (256, 2)))))(
         keys(7)
     )
     assert np.var(strat.mean) < 0.05 * np.var(plain.mean)
@@ -147,7 +152,7 @@ def test_control_variate_unbiased_and_reduces_variance():
         u = jax.random.uniform(k, (256,))
         return mc.control_variate(jnp.exp(u), u, 0.5)
 
-    ests = jax.vmap(est)(keys(8))
+    ests = jvmap(est)(keys(8))
     assert_unbiased(ests, math.e - 1)
     plain_var = (0.5 * (math.e**2 - 1) - (math.e - 1) ** 2) / 256
     assert np.var(ests.mean) < 0.1 * plain_var  # rho^2 = 0.98 for exp(U) vs U
@@ -156,7 +161,7 @@ def test_control_variate_unbiased_and_reduces_variance():
 
 
 def test_antithetic_unbiased_and_reduces_variance():
-    ests = jax.vmap(lambda k: mc.antithetic(lambda u: jnp.exp(u[:, 0]), 128, u_dim=1, key=k))(
+    ests = jvmap(lambda k: mc.antithetic(lambda u: jnp.exp(u[:, 0]), 128, u_dim=1, key=k))(
         keys(9)
     )
     assert_unbiased(ests, math.e - 1)
@@ -191,7 +196,7 @@ def test_weighted_importance_sampling_eq_2_34_consistent():
         wts = mc.tent_pdf(x[:, 0], 1.0) * mc.tent_pdf(x[:, 1], 1.0)
         return mc.weighted_importance_sampling(1 + x[:, 0] + x[:, 1] ** 2, wts)
 
-    ests = jax.vmap(est)(keys(12))
+    ests = jvmap(est)(keys(12))
     assert_unbiased(ests, 1 + 1 / 6)  # bias O(1/n) is far below the t-test's resolution here
     with pytest.raises(eqx.EquinoxRuntimeError, match="sum to 0"):
         mc.weighted_importance_sampling(jnp.ones(3), jnp.zeros(3))
@@ -207,7 +212,7 @@ def test_filter_importance_sampling_eq_2_35(weighted):
     def filt(x):
         return mc.tent_pdf(x[:, 0], 1.0) * mc.tent_pdf(x[:, 1], 1.0)
 
-    ests = jax.vmap(
+    ests = jvmap(
         lambda k: mc.filter_importance_sampling(
             lambda x: 1 + x[:, 0] + x[:, 1] ** 2, filt, sample, filt, 512, key=k, weighted=weighted
         )
@@ -218,7 +223,7 @@ def test_filter_importance_sampling_eq_2_35(weighted):
 @pytest.mark.parametrize("method", ["mc", "stratified", "lhs", "sobol", "halton", "lattice"])
 def test_integrate_box_unbiased(method):
     n = 256
-    ests = jax.vmap(
+    ests = jvmap(
         lambda k: mc.integrate(
             smooth_2d, ((0.0, 1.0), (0.0, 1.0)), n, method=method, key=k, n_replicates=4
         )

@@ -24,7 +24,7 @@ def _dir(theta, phi=0.3):
     return jnp.array([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
 
 
-def _sphere_integral(pdf_fn, n_z=1024, n_phi=2048):
+def _sphere_integral(pdf_fn, n_z=768, n_phi=1536):
     z = -1 + (np.arange(n_z) + 0.5) * 2 / n_z
     phi = (np.arange(n_phi) + 0.5) * 2 * np.pi / n_phi
     Z, P = np.meshgrid(z, phi, indexing="ij")
@@ -89,6 +89,7 @@ def _rough_cases():
 ROUGH_CASES = _rough_cases()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "name,theta,bxdf", ROUGH_CASES, ids=[f"{c[0]}-{c[1]}" for c in ROUGH_CASES]
 )
@@ -105,6 +106,7 @@ DIELECTRIC_CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("theta,alpha,eta", DIELECTRIC_CASES)
 def test_rough_dielectric_sampling_chi2(theta, alpha, eta):
     bxdf = sc.RoughDielectricBxDF(alpha, eta)
@@ -112,6 +114,7 @@ def test_rough_dielectric_sampling_chi2(theta, alpha, eta):
     assert res.passed, res.message
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("theta", [0.3, 1.2, np.pi - 0.5])
 def test_two_sided_sampling_chi2(theta):
     bxdf = sc.TwoSidedBxDF(sc.DiffuseBxDF(0.5), sc.RoughConductorBxDF(0.3, 0.2, 3.0))
@@ -248,6 +251,7 @@ def test_white_furnace_diffuse_and_smooth(theta):
         np.testing.assert_allclose(m, 1.0, rtol=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("theta", [0.0, 0.8, 1.4])
 @pytest.mark.parametrize("alpha", [0.05, 0.3, 1.0])
 def test_white_furnace_rough_albedo_at_most_one(theta, alpha):

@@ -97,6 +97,7 @@ def test_dielectric_reflectance_is_fresnel():
     _within(sc.bihemispherical_reflectance(b, n_samples=200_000, key=KEY), exact)
 
 
+@pytest.mark.slow
 def test_error_estimate_is_calibrated():
     # Over independent replicates, |estimate - truth| / se behaves like |N(0, 1)|.
     b = sc.OrenNayarBxDF(0.8, 0.3, model="fujii")

@@ -121,7 +121,7 @@ def test_lookup_rejects_bad_rgb(lut):
         with pytest.raises(ValueError, match="rgb"):
             lut.coefficients(np.array(bad))
     with pytest.raises(eqx.EquinoxRuntimeError, match="rgb"):
-        jax.jit(lambda x: lut.coefficients(x))(jnp.array([-0.1, 0.2, 0.3]))
+        eqx.filter_jit(lambda x: lut.coefficients(x))(jnp.array([-0.1, 0.2, 0.3]))
 
 
 def test_fit_lut_rejects_bad_arguments():
@@ -154,9 +154,9 @@ def test_fit_lut_small_table():
     rgb = scale[k] * np.array([[1.0, i / 9, j / 9], [j / 9, 1.0, i / 9], [i / 9, j / 9, 1.0]])
     de, _ = up.roundtrip_delta_E(lut, rgb)
     assert de.max() < 0.01
-    # A coarse table is less accurate than the packaged one, but sane.
+    # A coarse table interpolates much worse than the res-64 one, but it is a sane table.
     de_grid, _ = up.roundtrip_delta_E(lut, up.roundtrip_grid_rgb(9))
-    assert de_grid.max() < 10.0
+    assert np.isfinite(de_grid).all() and de_grid.mean() < 1.5
 
 
 @pytest.mark.slow
