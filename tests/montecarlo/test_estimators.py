@@ -63,9 +63,7 @@ def test_importance_sampling_unbiased_and_cosine_beats_uniform():
     cos = jvmap(
         lambda k: est(k, mc.sample_cosine_hemisphere, lambda w: mc.cosine_hemisphere_pdf(w[:, 2]))
     )(keys())
-    uni = jvmap(lambda k: est(k, mc.sample_uniform_hemisphere, mc.uniform_hemisphere_pdf))(
-        keys()
-    )
+    uni = jvmap(lambda k: est(k, mc.sample_uniform_hemisphere, mc.uniform_hemisphere_pdf))(keys())
     assert_unbiased(cos, EXACT_HEMI)
     assert_unbiased(uni, EXACT_HEMI)
     assert np.var(cos.mean) < 0.5 * np.var(uni.mean)
@@ -141,9 +139,7 @@ EXACT_2D = (math.e - 1) / 2
 def test_stratified_estimate_unbiased_with_less_variance():
     strat = jvmap(lambda k: mc.stratified_estimate(smooth_2d, (8, 8), 4, key=k))(keys(6))
     assert_unbiased(strat, EXACT_2D)
-    plain = jvmap(lambda k: mc.estimate_mean(smooth_2d(jax.random.uniform(k, (256, 2)))))(
-        keys(7)
-    )
+    plain = jvmap(lambda k: mc.estimate_mean(smooth_2d(jax.random.uniform(k, (256, 2)))))(keys(7))
     assert np.var(strat.mean) < 0.05 * np.var(plain.mean)
 
 
@@ -161,9 +157,7 @@ def test_control_variate_unbiased_and_reduces_variance():
 
 
 def test_antithetic_unbiased_and_reduces_variance():
-    ests = jvmap(lambda k: mc.antithetic(lambda u: jnp.exp(u[:, 0]), 128, u_dim=1, key=k))(
-        keys(9)
-    )
+    ests = jvmap(lambda k: mc.antithetic(lambda u: jnp.exp(u[:, 0]), 128, u_dim=1, key=k))(keys(9))
     assert_unbiased(ests, math.e - 1)
     plain_var = (0.5 * (math.e**2 - 1) - (math.e - 1) ** 2) / 256
     assert np.var(ests.mean) < 0.1 * plain_var

@@ -187,7 +187,7 @@ def test_first_primes():
 def test_permutation_element_is_a_permutation():
     for n, seed in [(2, 1), (7, 12345), (131, 99), (1000, 7)]:
         i = jnp.arange(n, dtype=jnp.uint32)
-        p = np.asarray(_halton.permutation_element(i, jnp.uint32(n), jnp.uint32(seed)))
+        p = np.asarray(jax.jit(_halton.permutation_element)(i, jnp.uint32(n), jnp.uint32(seed)))
         assert sorted(p.tolist()) == list(range(n))
 
 
