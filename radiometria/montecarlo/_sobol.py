@@ -149,6 +149,9 @@ def _sobol_uint32(v: Array, n: int, skip: int) -> Array:
     hi_idx = jnp.asarray(first // block, jnp.uint32) + jnp.arange(n_hi, dtype=jnp.uint32)
     t_lo = _xor_table(w, lo_idx, lo_bits)
     t_hi = _xor_table(w[lo_bits:], hi_idx, BITS - lo_bits)
+    # Materialise the two small tables: otherwise XLA may fuse (duplicate) their bit loops into
+    # every element of the large output.
+    t_lo, t_hi = jax.lax.optimization_barrier((t_lo, t_hi))
     x = (t_hi[:, None, :] ^ t_lo[None, :, :]).reshape(n_hi * block, d)
     return x[skip - first : skip - first + n]
 
