@@ -91,12 +91,15 @@ def bench_colour(size: int, target: int) -> dict:
     illuminant = colour.SDS_ILLUMINANTS["D65"]
     lut = LUT3D_Jakob2019()
     t0 = time.perf_counter()
+    c0 = time.process_time()
     lut.generate(cs, cmfs, illuminant, size, print_callable=lambda *a, **k: None)
     t = time.perf_counter() - t0
+    cpu = time.process_time() - c0
     return {
         "size": size,
         "wall_s": round(t, 3),
-        "extrapolated_wall_s_res%d" % target: round(t * (target / size) ** 3, 1),
+        "cpu_s": round(cpu, 3),
+        f"extrapolated_wall_s_res{target}": round(t * (target / size) ** 3, 1),
     }
 
 

@@ -92,3 +92,13 @@ def test_render_argparse_errors_exit_2():
         timeout=120,
     )
     assert out.returncode == 2 and "invalid int value" in out.stderr
+
+
+@pytest.mark.slow
+def test_demo_render_smoke(tmp_path):
+    from radiometria.render._cli import demo_render
+
+    paths = demo_render(tmp_path, spp=64, smoke=True)
+    assert [p.name for p in paths] == ["cornell_box.exr", "cornell_box.png"]
+    rgb, _ = read_exr(paths[0])
+    assert rgb.shape == (32, 32, 3) and np.all(np.isfinite(rgb))

@@ -36,9 +36,11 @@ from ._integrators import (
     path_radiance as path_radiance,
     sample_dimensions as sample_dimensions,
 )
-from ._render_scene import RenderScene as RenderScene
+from ._materials import MaterialTables as MaterialTables
+from ._render_scene import RenderScene as RenderScene, compile_scene as compile_scene
 from ._spectral import (
     SpectrumTable as SpectrumTable,
     sample_hero_wavelengths as sample_hero_wavelengths,
+    spectrum_values as spectrum_values,
     wavelength_grid_nm as wavelength_grid_nm,
 )

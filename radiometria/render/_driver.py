@@ -6,8 +6,10 @@ converts it to linear sRGB:
 1. **Work layout.** The image's $P = W H$ pixels are cut into tiles of `t` pixels; one *step*
    traces `k` samples (passes) of every pixel of one tile, `n = t k` paths at once, so memory
    is bounded by the batch, never by $W H \cdot \mathrm{spp}$. The film's memory is checked
-   against the available memory before anything is allocated.
-2. **Samples.** Pass `s` of pixel `p` draws its variates from `pixel_samples` (independent or
+   against the available memory before anything is allocated. `k` does not depend on spp
+   (passes past spp are inactive paths, which cost nothing), so one compiled step serves any
+   sample count.
+2. **Samples.** Pass `s` of pixel `p` draws its variates from `sample_block` (independent or
    padded Owen-scrambled Sobol); they depend only on `(seed, s, p)`, so the image depends
    neither on the batching nor on the number of devices. The film position is uniform in the
    pixel (splatting) or the pixel centre plus an offset drawn from the filter (filter
@@ -18,18 +20,23 @@ converts it to linear sRGB:
    (a constant spectrum $L$ gives $Y = L$; the D65 white of $Y = 1$ gives linear sRGB
    (1, 1, 1), as in Mitsuba and PBRT). Samples are splatted into every pixel within the filter
    radius with weight $f$ (eq. 2.34, Mitsuba's `hdrfilm`) or added to their own pixel with
-   weight $f/p$ (eq. 2.35, pbrt-v4); the film divides the weighted sums at the end
-   (`film_develop`) and converts XYZ to linear sRGB (D65).
+   weight $f/p$ (eq. 2.35, pbrt-v4): each pixel's samples are first reduced to one
+   footprint per pixel, then scatter-added into the film (`radiometria.camera.Film`), which
+   divides the weighted sums at the end (`film_develop`) and converts XYZ to linear sRGB.
 
 **Devices.** The pixel axis of every step is sharded over a 1-D mesh of the local devices
 (`jax.shard_map`): each device traces its share of the tile, with no communication; the
 samples are then added into the film's accumulators (a gather across the devices). On several
-hosts (call `jax.distributed.initialize()` first on every host), process `i` of `m` renders
-the steps `i, i + m, i + 2m, ...` on its own devices, and the films' sums are added across
-processes with `jax.experimental.multihost_utils.process_allgather`, so every process returns
-the whole image. For a given seed and batch size the image is the same on any number of
-devices or hosts (on GPUs, splatting's scatter-add uses atomics, so the last bits may vary
-unless XLA's deterministic ops are enabled).
+hosts, call `jax.distributed.initialize(coordinator_address, num_processes, process_id)` on
+every host before rendering (on CPUs also
+`jax.config.update("jax_cpu_collectives_implementation", "gloo")`) and run the same
+`render` call everywhere: process `i` of `m` renders the steps `i, i + m, i + 2m, ...` on its
+own devices, and the films' sums are added across processes with
+`jax.experimental.multihost_utils.process_allgather`, so every process returns the whole
+image (tested with two CPU processes in `tests/render/test_driver.py`). For a given seed and
+batch size the image is the same on any number of devices or hosts, up to float rounding of
+the sums (on GPUs, splatting's scatter-add uses atomics, so the last bits may vary unless
+XLA's deterministic ops are enabled).
 """
 
 import functools
@@ -46,10 +53,10 @@ from .._checks import check_choice, check_positive_int
 from ..camera import Film, film_develop, film_samples_to_XYZ
 from ._integrators import DIMENSIONS_PER_BOUNCE, path_radiance
 from ._render_scene import RenderScene
-from ._samplers import SAMPLERS, sample_block
+from ._samplers import SAMPLERS, sample_block, sampler_seed
 from ._spectral import sample_hero_wavelengths
 
-__all__ = ["INTEGRATORS", "RECONSTRUCTIONS", "estimate_render_memory", "render"]
+__all__ = ["INTEGRATORS", "RECONSTRUCTIONS", "render"]
 
 
 INTEGRATORS = ("path", "direct")
@@ -67,19 +74,7 @@ def _available_host_memory() -> int:
         return 8 * 2**30
 
 
-def _path_bytes(n_triangles: int, n_dims: int) -> int:
-    """A generous estimate of the device bytes one path of a batch needs while it is traced."""
-    # variates, path state and temporaries (float32), plus the (rays, triangles) temporaries
-    # of brute-force intersection.
-    return 4 * (2 * n_dims + 256 + 12 * n_triangles)
-
-
-def estimate_render_memory(
-    width: int, height: int, batch: int, n_triangles: int, max_depth: int
-) -> tuple[int, int]:
-    """Estimated `(host_bytes, device_bytes)` of a render: the film, and one batch of paths."""
-    n_dims = CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * (max_depth - 1)
-    return width * height * _FILM_BYTES_PER_PIXEL, batch * _path_bytes(n_triangles, n_dims)
+_PATH_BYTES = 4 * 512  # generous: a path's state, variates, footprint and temporaries (float32)
 
 
 @dataclass(frozen=True)
@@ -156,7 +151,8 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     valid_pixel = pixel < cfg.n_pixels
     pix = jnp.repeat(jnp.where(valid_pixel, pixel, 0), k)  # (n,): pixel-major
     passes = jnp.tile(pass_start + jnp.arange(k, dtype=jnp.int32), t)
-    sample = functools.partial(sample_block, key, cfg.sampler, spp=spp, dtype=dtype)
+    seed = sampler_seed(key)
+    sample = functools.partial(sample_block, seed, cfg.sampler, dtype=dtype)
     u = sample(pix, passes, 0, CAMERA_DIMENSIONS)
 
     def bounce_samples(b, paths):
@@ -257,7 +253,11 @@ def render(
     - `batch`: paths traced per step (bounds memory); default: about 2^16 per CPU device,
         2^20 per GPU, within the device memory.
     - `progress`: show a tqdm progress bar on stderr.
-    - `devices`: the devices to shard the pixels over; default `jax.local_devices()`.
+    - `devices`: the devices to shard the pixels over; default `jax.local_devices()`. On a
+        CPU, XLA has one device unless told otherwise, and one device runs on about one core:
+        set `XLA_FLAGS=--xla_force_host_platform_device_count=<cores>` before JAX is imported
+        to get one device per core (2.4x faster on 2 cores; `benchmarks/bench_render.py`
+        does this).
     - `camera`, `rfilter`: a `radiometria.camera.PinholeCamera` and reconstruction filter, for
         a `RenderScene` (default filter: Gaussian, stddev 0.5 px, radius 2 px).
     - `rr_depth`: path segments before Russian roulette starts (Mitsuba's `rr_depth`);
@@ -315,11 +315,8 @@ def render(
     devices = list(jax.local_devices() if devices is None else devices)
     if not devices:
         raise ValueError("`devices` must name at least one device.")
-    n_triangles = int(scene.p0.shape[0])
-    if batch is None:
-        batch = _default_batch(devices, n_triangles, max_depth)
-    batch = check_positive_int(batch, "batch")
-    film_bytes, _ = estimate_render_memory(width, height, batch, n_triangles, max_depth)
+    batch = _default_batch(devices) if batch is None else check_positive_int(batch, "batch")
+    film_bytes = n_pixels * _FILM_BYTES_PER_PIXEL
     available = _available_host_memory()
     if film_bytes > available // 2:
         raise ValueError(
@@ -348,13 +345,14 @@ def render(
     # Multi-host: process i of m takes steps i, i + m, ...; the films are summed at the end.
     n_proc, proc = jax.process_count(), jax.process_index()
     steps = range(proc, plan.n_steps, n_proc)
-    bar = _progress_bar(progress, total=len(steps) * plan.tile * plan.passes)
+    bar = _progress_bar(progress, total=n_pixels * spp if n_proc == 1 else None)
     for i in steps:
         group, tile = divmod(i, plan.n_tiles)
         pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
         film = step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel)
-        if bar is not None:
-            bar.update(plan.tile * plan.passes)
+        if bar is not None:  # the step's paths: its pixels in the image x its passes below spp
+            pixels = min(plan.tile, n_pixels - tile * plan.tile)
+            bar.update(pixels * min(plan.passes, spp - group * plan.passes))
     if bar is not None:
         bar.close()
     if n_proc > 1:
@@ -400,10 +398,8 @@ def _resolve_scene(scene, camera, rfilter, width, height):
     )
 
 
-def _default_batch(devices, n_triangles: int, max_depth: int) -> int:
+def _default_batch(devices) -> int:
     """Paths per step: about 2^16 per CPU device, 2^20 per accelerator, within memory."""
-    n_dims = CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * (max_depth - 1)
-    per_path = _path_bytes(n_triangles, n_dims)
     if devices[0].platform == "cpu":
         budget = min(2**30, _available_host_memory() // 4)
         target = 2**16
@@ -411,7 +407,7 @@ def _default_batch(devices, n_triangles: int, max_depth: int) -> int:
         stats = devices[0].memory_stats() or {}
         budget = int(stats.get("bytes_limit", 8 * 2**30)) // 4
         target = 2**20
-    per_device = max(1024, min(target, budget // per_path))
+    per_device = max(1024, min(target, budget // _PATH_BYTES))
     return per_device * len(devices)
 
 
@@ -449,7 +445,7 @@ def _compiled_step(cfg: _Config):
     return step
 
 
-def _progress_bar(progress: bool, total: int):
+def _progress_bar(progress: bool, total: int | None):
     if not progress:
         return None
     import sys

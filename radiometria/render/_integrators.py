@@ -55,7 +55,19 @@ DIMENSIONS_PER_BOUNCE = 8
 
 
 def sample_dimensions(max_depth: int) -> int:
-    """Number of uniform variates one path of the integrators consumes (camera excluded)."""
+    """Number of uniform variates one path of the integrators consumes, camera excluded.
+
+    **Arguments:**
+
+    - `max_depth`: the largest number of path segments. [1]
+
+    **Returns:**
+
+    `8 (max_depth - 1)`: eight variates per scattering vertex (module docstring). [1]
+
+    !!! note "Thesis"
+        Chapters 5-6: the dimension of the path-space integrand seen by a sampler.
+    """
     return DIMENSIONS_PER_BOUNCE * max(max_depth - 1, 0)
 
 
@@ -195,6 +207,8 @@ def path_radiance(
         alive=alive,
         pdf=jnp.zeros((n_rays,), dtype),
         specular=jnp.ones((n_rays,), bool),  # camera rays: emission seen with MIS weight 1
+        eta_scale=jnp.ones((n_rays,), dtype),
+        hero_only=jnp.zeros((n_rays,), bool),
     )
     chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)
     n_pad = -(-n_rays // chunk) * chunk
@@ -223,7 +237,10 @@ def path_radiance(
 
     segments = jnp.arange(max_depth, dtype=jnp.int32)
     state, _ = jax.lax.scan(one_segment, state, segments)
-    return state.radiance
+    # A path through a dispersive interface kept only its hero wavelength: its estimate is the
+    # hero's alone, weighted as one wavelength out of k (pbrt's `TerminateSecondary`).
+    hero = jnp.zeros((1, k), dtype).at[0, 0].set(k)
+    return jnp.where(state.hero_only[:, None], state.radiance[:, :1] * hero, state.radiance)
 
 
 def _default_chunk(n_rays: int) -> int:
@@ -245,6 +262,8 @@ class _PathState(eqx.Module):
     alive: Array  # bool (n,)
     pdf: Array  # solid-angle density of the BSDF sample that chose `d` (n,)
     specular: Array  # bool (n,): `d` came from the camera or a delta lobe (no MIS)
+    eta_scale: Array  # (n,): product of eta^2 over refractions, for roulette (Mitsuba, pbrt)
+    hero_only: Array  # bool (n,): secondary wavelengths terminated by dispersion
 
 
 def _segment(
@@ -274,12 +293,14 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     dtype = v.p.dtype
     wo = -state.d
     material = scene.face_material[v.face]
-    two_sided = scene.two_sided[material]
-    # Shading frame: the face normal, flipped towards wo for two-sided materials. A ray
-    # arriving at the back of a one-sided surface ends there (Mitsuba's one-sided BSDFs).
+    two_sided = scene.materials.two_sided[material]
+    transmissive = scene.materials.transmissive[material]
+    # Shading frame: the face normal, flipped towards wo for two-sided reflectors. A ray
+    # arriving at the back of a one-sided reflector ends there (Mitsuba's one-sided BSDFs);
+    # dielectrics keep the normal, and wo below it means the ray is inside.
     front = v.cos_o > 0
-    n = jnp.where((two_sided & ~front)[:, None], -v.n, v.n)
-    alive = state.alive & (front | two_sided)
+    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.n, v.n)
+    alive = state.alive & (front | two_sided | transmissive)
     s, t = coordinate_system(n)
 
     def to_local(w):
@@ -293,7 +314,10 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
 
     # Next-event estimation: a point on an emissive triangle, chosen by power x area.
-    j = jnp.searchsorted(scene.light_cdf, u_b[:, 4], side="right")
+    # (a comparison against every entry is cheaper than a binary-search loop for a few lights)
+    few = scene.light_cdf.shape[0] <= 64
+    method = "compare_all" if few else "scan_unrolled"
+    j = jnp.searchsorted(scene.light_cdf, u_b[:, 4], side="right", method=method)
     lf = scene.light_face[jnp.clip(j, 0, scene.light_face.shape[0] - 1)]
     bary = sample_uniform_triangle(u_b[:, 0:2]).astype(dtype)
     y = scene.p0[lf] + bary[:, 1:2] * scene.e1[lf] + bary[:, 2:3] * scene.e2[lf]
@@ -319,9 +343,10 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     wi = to_world(bs.wi)
     wi = wi / jnp.sqrt(_dot(wi, wi))[:, None]
 
-    # Russian roulette: survive with probability q = min(max_lambda beta, 0.95); survivors
-    # are reweighted by 1/q (Mitsuba's rule).
-    q = jnp.minimum(jnp.max(beta, axis=-1), 0.95)
+    # Russian roulette: survive with probability q = min(max_lambda beta eta^2, 0.95);
+    # survivors are reweighted by 1/q (Mitsuba's rule).
+    eta_scale = state.eta_scale * jnp.where(bs.is_transmission, bs.eta * bs.eta, 1.0)
+    q = jnp.minimum(jnp.max(beta, axis=-1) * eta_scale, 0.95)
     alive = alive & (~roulette | (u_b[:, 6] < q))
     beta = jnp.where(alive[:, None], beta / jnp.where(alive & roulette, q, 1.0)[:, None], 0.0)
     return _PathState(
@@ -332,6 +357,8 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
         alive=alive,
         pdf=bs.pdf,
         specular=bs.is_delta,
+        eta_scale=eta_scale,
+        hero_only=state.hero_only | (alive & bs.terminate_secondary),
     )
 
 
@@ -345,6 +372,23 @@ def direct_radiance(
     """Direct illumination: emission plus one light and one BSDF sample combined with MIS.
 
     The same estimator as `path_radiance(..., max_depth=2)` (Mitsuba's `direct` integrator with
-    one emitter and one BSDF sample); `u` has shape `(n, sample_dimensions(2))`.
+    one emitter and one BSDF sample).
+
+    **Arguments:**
+
+    - `scene`, `origins`, `directions`, `wavelength_nm`: as `path_radiance`. [scene units],
+        [nm]
+    - `u`: uniform variates `(n, sample_dimensions(2))` in [0, 1), or a function as in
+        `path_radiance`. [1]
+
+    **Returns:**
+
+    Radiance estimates `(n, k)`. [W m^-2 sr^-1 nm^-1]
+
+    !!! note "Thesis"
+        Chapter 8 (direct lighting; title only in the text).
+
+    ??? cite "References"
+        `Veach1997` §9.2 (MIS); `Pharr2023` §13.3.
     """
     return path_radiance(scene, origins, directions, wavelength_nm, u, max_depth=2, rr_depth=2)

@@ -13,7 +13,6 @@ import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 from .._checks import check_choice
-from ..scattering import DiffuseBxDF
 from ._bvh import BVH, build_bvh
 from ._intersect import (
     Hit,
@@ -22,7 +21,8 @@ from ._intersect import (
     intersect_brute_force_closest,
     intersect_closest,
 )
-from ._mesh import TriangleMesh
+from ._materials import MaterialTables, material_bxdf
+from ._mesh import TriangleMesh, _areas, _corners
 from ._spectral import SpectrumTable
 
 __all__ = ["BRUTE_FORCE_MAX_TRIANGLES", "DEFAULT_UNBOUNDED_DEPTH", "RenderScene", "compile_scene"]
@@ -34,7 +34,14 @@ class RenderScene(eqx.Module):
     """Triangles, materials and emitters as arrays, ready for `path_radiance`.
 
     Build one with `RenderScene.from_triangles` (or from a loaded scene with
-    `radiometria.render.compile_scene`). All arrays are float32 unless noted.
+    `radiometria.render.compile_scene`). All arrays are float32 unless noted; lengths are in
+    the scene's unit [scene units], spectra on the 1 nm grid of `wavelength_grid_nm`.
+
+    !!! note "Thesis"
+        Chapter 8 (the scene of the light transport equation).
+
+    ??? cite "References"
+        `Pharr2023` §12.2 (sampling area lights by power and area).
     """
 
     p0: Float[Array, "f 3"]  # first vertex of each triangle [scene units]
@@ -43,8 +50,7 @@ class RenderScene(eqx.Module):
     normal: Float[Array, "f 3"]  # unit geometric normal, (v1 - v0) x (v2 - v0) direction
     face_material: Int[Array, " f"]  # material index of each triangle
     face_emitter: Int[Array, " f"]  # emitter index of each triangle, -1 when not emissive
-    reflectance: SpectrumTable  # one row per material [1]
-    two_sided: Bool[Array, " m"]  # per material: scatter on both sides
+    materials: MaterialTables  # one row per material
     radiance: SpectrumTable  # one row per emitter [W m^-2 sr^-1 nm^-1]
     emitter_two_sided: Bool[Array, " e"]  # per emitter: emits on both sides
     light_face: Int[Array, " l"]  # emissive triangles
@@ -59,7 +65,7 @@ class RenderScene(eqx.Module):
         vertices,
         faces,
         face_material,
-        reflectance: SpectrumTable,
+        materials: "SpectrumTable | MaterialTables",
         face_emitter,
         radiance: SpectrumTable,
         *,
@@ -74,11 +80,13 @@ class RenderScene(eqx.Module):
 
         - `vertices`: `(v, 3)` positions [scene units]; `faces`: `(f, 3)` vertex indices, whose
             winding sets the front side (normal `(v1 - v0) x (v2 - v0)`).
-        - `face_material`: `(f,)` row of `reflectance` for each triangle.
-        - `reflectance`: diffuse reflectance spectra, one row per material [1].
+        - `face_material`: `(f,)` material (row of `materials`) of each triangle.
+        - `materials`: a `MaterialTables` (`MaterialTables.from_materials`), or a
+            `SpectrumTable` of diffuse reflectances, one row per (Lambertian) material [1].
         - `face_emitter`: `(f,)` row of `radiance` for each triangle, or -1.
         - `radiance`: emitted radiance spectra, one row per emitter, emitted on the front side.
-        - `two_sided`: `(m,)` booleans, materials that scatter on both sides (default: none).
+        - `two_sided`: `(m,)` booleans, Lambertian materials that scatter on both sides
+            (default: none; only with a `SpectrumTable` of reflectances).
         - `emitter_two_sided`: `(e,)` booleans, emitters that emit on both sides (default:
             none).
         - `accelerator`: `"bvh"`, `"brute_force"` (test every triangle: fastest for a few
@@ -97,27 +105,33 @@ class RenderScene(eqx.Module):
         n_faces = faces.shape[0]
         face_material = np.asarray(face_material, dtype=np.int64).reshape(n_faces)
         face_emitter = np.asarray(face_emitter, dtype=np.int64).reshape(n_faces)
-        n_mat = reflectance.values.shape[0]
+        if isinstance(materials, SpectrumTable):
+            n_mat = materials.values.shape[0]
+            materials = MaterialTables.lambertian(
+                materials,
+                np.zeros(n_mat, bool) if two_sided is None else np.asarray(two_sided, bool),
+            )
+        elif two_sided is not None:
+            raise ValueError("`two_sided` goes with a SpectrumTable; MaterialTables carry it.")
+        n_mat = materials.kind.shape[0]
         n_em = radiance.values.shape[0]
         if face_material.min(initial=0) < 0 or face_material.max(initial=0) >= n_mat:
-            raise ValueError(f"`face_material` must index the {n_mat} reflectance rows.")
+            raise ValueError(f"`face_material` must index the {n_mat} materials.")
         if face_emitter.min(initial=-1) < -1 or face_emitter.max(initial=-1) >= n_em:
             raise ValueError(f"`face_emitter` must be -1 or index the {n_em} radiance rows.")
-        two_sided = (
-            np.zeros(n_mat, bool) if two_sided is None else np.asarray(two_sided, bool)
-        ).reshape(n_mat)
         emitter_two_sided = (
             np.zeros(n_em, bool)
             if emitter_two_sided is None
             else np.asarray(emitter_two_sided, bool)
         ).reshape(n_em)
+        if n_em == 0:  # no light: one black row keeps the (clamped) emitter lookups in range
+            radiance = SpectrumTable(jnp.zeros((1,) + radiance.values.shape[1:], dtype))
+            emitter_two_sided = np.zeros(1, bool)
 
-        v0, v1, v2 = (vertices[faces[:, i]] for i in range(3))
+        v0, v1, v2 = _corners(np, vertices, faces)
         e1, e2 = v1 - v0, v2 - v0
-        cross = np.cross(e1, e2)
-        double_area = np.linalg.norm(cross, axis=1)
-        normal = cross / np.where(double_area > 0, double_area, 1.0)[:, None]
-        area = 0.5 * double_area
+        area = _areas(np, vertices, faces)
+        normal = np.cross(e1, e2) / np.where(area > 0, 2.0 * area, 1.0)[:, None]
 
         # Next-event estimation picks an emissive triangle with probability proportional to
         # area x (mean emitted radiance over the grid), then a point uniformly on it.
@@ -160,8 +174,7 @@ class RenderScene(eqx.Module):
             normal=f(normal),
             face_material=i(face_material),
             face_emitter=i(face_emitter),
-            reflectance=SpectrumTable(f(reflectance.values)),
-            two_sided=jnp.asarray(two_sided),
+            materials=materials,
             radiance=SpectrumTable(f(radiance.values)),
             emitter_two_sided=jnp.asarray(emitter_two_sided),
             light_face=i(light_face),
@@ -183,9 +196,9 @@ class RenderScene(eqx.Module):
         return intersect_brute_force_any(self.geometry, origins, directions, tmax)
 
     # -- materials -------------------------------------------------------------------------
-    def bsdf(self, material, wavelength_nm) -> DiffuseBxDF:
-        """The BSDF of each hit at its wavelengths (Lambertian with the material's reflectance)."""
-        return DiffuseBxDF(self.reflectance(material, wavelength_nm))
+    def bsdf(self, material, wavelength_nm):
+        """The BxDF of each hit's material at its wavelengths (`material_bxdf`)."""
+        return material_bxdf(self.materials, material, wavelength_nm)
 
 
 DEFAULT_UNBOUNDED_DEPTH = 64  # max_depth for scenes that leave it unbounded (Mitsuba's -1)
@@ -214,10 +227,12 @@ def _make_filter(film):
 def compile_scene(description, *, width=None, height=None, accelerator: str = "auto"):
     """Turn a loaded scene (`load_scene`) into `(RenderScene, PinholeCamera, filter)`.
 
-    Materials and emitters become spectra on the renderer's 1 nm grid (`spectrum_values`):
-    RGB reflectances as bounded sigmoid-polynomial spectra, RGB radiances as illuminant
-    spectra (x D65 with Y = 1), measured and blackbody spectra as given. The camera keeps its
-    field of view along its `fov_axis` when `width`/`height` override the film's size.
+    Materials become `MaterialTables` (see `radiometria.render._materials` for the supported
+    Mitsuba BSDFs); their spectra and the emitters' are tabulated on the renderer's 1 nm grid
+    (`spectrum_values`): RGB reflectances as bounded sigmoid-polynomial spectra, RGB radiances
+    as illuminant spectra (x D65 with Y = 1), measured and blackbody spectra as given. The
+    camera keeps its field of view along its `fov_axis` when `width`/`height` override the
+    film's size.
 
     **Arguments:**
 
@@ -228,36 +243,32 @@ def compile_scene(description, *, width=None, height=None, accelerator: str = "a
     **Returns:**
 
     `(scene, camera, rfilter)`.
+
+    !!! note "Thesis"
+        Chapter 8 (scenes); section 2.3 (camera and filter); section 2.2.3 (RGB to spectra).
+
+    ??? cite "References"
+        `Jakob2022` (Mitsuba 3's scene conventions).
     """
     from ..camera import PinholeCamera
     from ._spectral import spectrum_values
 
-    for m in description.materials:
-        if m.type != "diffuse":
-            raise ValueError(
-                f"{description.source or 'scene'}: material {m.name!r} has type {m.type!r}; "
-                "the integrators support 'diffuse' materials."
-            )
-    reflectance = np.stack(
-        [
-            spectrum_values(m.params.get("reflectance", {"value": 0.5}), "albedo")
-            for m in description.materials
-        ]
-    )
+    where = description.source or "scene"
+    materials = MaterialTables.from_materials(description.materials, where)
+    n_grid = materials.reflectance.values.shape[1]
     if description.emitters:
         radiance = np.stack(
             [spectrum_values(e.radiance, "illuminant") for e in description.emitters]
         )
     else:
-        radiance = np.zeros((0, reflectance.shape[1]))
+        radiance = np.zeros((0, n_grid))
     scene = RenderScene.from_triangles(
         description.vertices,
         description.faces,
         description.face_material,
-        SpectrumTable(jnp.asarray(reflectance, jnp.float32)),
+        materials,
         description.face_emitter,
-        SpectrumTable(jnp.asarray(radiance.reshape(-1, reflectance.shape[1]), jnp.float32)),
-        two_sided=[m.two_sided for m in description.materials],
+        SpectrumTable(jnp.asarray(radiance.reshape(-1, n_grid), jnp.float32)),
         emitter_two_sided=[e.two_sided for e in description.emitters],
         accelerator=accelerator,
     )

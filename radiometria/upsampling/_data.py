@@ -73,7 +73,7 @@ def get_lut(space="sRGB") -> RGBToSpectrumLUT:
 
     **Arguments:**
 
-    - `space`: colour-space name or alias (default "sRGB").
+    - `space`: colour-space name or alias (default "sRGB"). [-]
 
     **Returns:**
 

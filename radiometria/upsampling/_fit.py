@@ -169,22 +169,38 @@ def _lm_direction(J: Array, r: Array, mu: Array) -> Array:
 
 
 class LMState(eqx.Module):
-    """State of the batched Levenberg-Marquardt iteration (one row per colour)."""
+    """State of the batched Levenberg-Marquardt iteration (one row per colour).
 
-    c: Array  # (n, 3) current (best) coefficients, normalised
+    `c, r, J, cost` describe the best point so far; `c_next` is the candidate the next
+    iteration evaluates. Each iteration costs exactly one spectral evaluation (residual and
+    Jacobian at `c_next`), and the loop body is the only place that evaluates the model, so the
+    compiled program holds one copy of it.
+    """
+
+    c: Array  # (n, 3) best coefficients so far, normalised
     r: Array  # (n, 3) residual at c
     J: Array  # (n, 3, 3) Jacobian at c
-    cost: Array  # (n,) |r|^2
+    cost: Array  # (n,) |r|^2 (inf before the first evaluation)
     mu: Array  # (n,) damping
+    c_next: Array  # (n, 3) the candidate to evaluate next
 
 
-def lm_init(
-    c: Array, lab_t: Array, m: ModelArrays, mu0: float = 1e-4, chunk: int | None = None
-) -> LMState:
-    r, J = residual_and_jacobian(c, lab_t, m, chunk)
-    cost = jnp.sum(r * r, axis=-1)
-    cost = jnp.where(jnp.isfinite(cost), cost, jnp.inf)
-    return LMState(c, r, J, cost, jnp.full(cost.shape, mu0, c.dtype))
+def _propose(c: Array, r: Array, J: Array, mu: Array) -> Array:
+    return c + _lm_direction(J, r, mu)
+
+
+def lm_init(c: Array, mu0: float = 1e-4) -> LMState:
+    """A state whose first iteration evaluates the start point `c` (n, 3) (cost = inf)."""
+    n = c.shape[0]
+    zero = jnp.zeros_like(c)
+    return LMState(
+        c=c,
+        r=zero,
+        J=jnp.zeros((n, 3, 3), c.dtype),
+        cost=jnp.full((n,), jnp.inf, c.dtype),
+        mu=jnp.full((n,), mu0, c.dtype),
+        c_next=c,
+    )
 
 
 def lm_retarget(s: LMState, lab_old: Array, lab_new: Array, mu0: float = 1e-4) -> LMState:
@@ -192,33 +208,32 @@ def lm_retarget(s: LMState, lab_old: Array, lab_new: Array, mu0: float = 1e-4) -
 
     The residual is Lab(model) - Lab(target), so moving the target only shifts it; the
     Jacobian depends on the coefficients alone. The brightness sweep starts every step this
-    way from the previous step's final state (saving one spectral evaluation per step).
+    way from the previous step's final state (saving one spectral evaluation per step), and the
+    first candidate is the Gauss-Newton step from there (the tangent predictor).
     """
     r = s.r + (lab_old - lab_new)
     cost = jnp.sum(r * r, axis=-1)
     cost = jnp.where(jnp.isfinite(cost), cost, jnp.inf)
-    return LMState(s.c, r, s.J, cost, jnp.full(cost.shape, mu0, s.c.dtype))
+    mu = jnp.full(cost.shape, mu0, s.c.dtype)
+    return LMState(s.c, r, s.J, cost, mu, _propose(s.c, r, s.J, mu))
 
 
 def lm_step(s: LMState, lab_t: Array, m: ModelArrays, chunk: int | None = None) -> LMState:
-    """One damped Gauss-Newton (Levenberg-Marquardt) step for every row.
+    """One Levenberg-Marquardt iteration for every row.
 
-    Takes the step of `_lm_direction` (damping $\\mu$, Marquardt scaling), evaluates
-    the residual and Jacobian at $c + \\delta$ in the same pass, and keeps the step only where
-    it lowers the cost (then $\\mu \\leftarrow \\mu/5$, else $\\mu \\leftarrow 8\\mu$).
+    Evaluates the residual and Jacobian at the candidate `c_next`, keeps it where it lowers the
+    cost (then $\\mu \\leftarrow \\mu/5$, else $\\mu \\leftarrow 8\\mu$), and proposes the
+    next candidate, the damped step of `_lm_direction` from the best point.
     """
-    c_new = s.c + _lm_direction(s.J, s.r, s.mu)
-    r_new, J_new = residual_and_jacobian(c_new, lab_t, m, chunk)
+    r_new, J_new = residual_and_jacobian(s.c_next, lab_t, m, chunk)
     cost_new = jnp.sum(r_new * r_new, axis=-1)
     ok = (cost_new < s.cost) & jnp.isfinite(cost_new)
     sel = lambda a, b: jnp.where(ok.reshape(ok.shape + (1,) * (a.ndim - 1)), a, b)  # noqa: E731
-    return LMState(
-        c=sel(c_new, s.c),
-        r=sel(r_new, s.r),
-        J=sel(J_new, s.J),
-        cost=jnp.where(ok, cost_new, s.cost),
-        mu=jnp.clip(jnp.where(ok, s.mu * 0.2, s.mu * 8.0), 1e-9, 1e9),
-    )
+    c, r, J = sel(s.c_next, s.c), sel(r_new, s.r), sel(J_new, s.J)
+    cost = jnp.where(ok, cost_new, s.cost)
+    first = jnp.isinf(s.cost)  # the evaluation of a start point is not a step
+    mu = jnp.where(first, s.mu, jnp.clip(jnp.where(ok, s.mu * 0.2, s.mu * 8.0), 1e-9, 1e9))
+    return LMState(c, r, J, cost, mu, _propose(c, r, J, mu))
 
 
 def lm_iterate(

@@ -57,6 +57,9 @@ class ForwardModel(eqx.Module):
     - `rgb_gain` (3,): the white-balance gains (module docstring). [-]
     - `illuminant` (n,): the space's illuminant, unit relative luminance. [relative]
     - `step_nm`: grid spacing (static). [nm]
+
+    !!! note "Thesis"
+        Eq. 2.27, section 2.2.3.
     """
 
     colourspace: str = eqx.field(static=True)
@@ -106,11 +109,15 @@ def _forward_model_cached(name: str, step_nm: float) -> ForwardModel:
     n = int(round((LAMBDA_MAX_NM - LAMBDA_MIN_NM) / step_nm)) + 1
     wl_np = np.linspace(LAMBDA_MIN_NM, LAMBDA_MAX_NM, n)
     with jax.enable_x64(True):
-        wl = jnp.asarray(wl_np, dtype=jnp.float64)
-        ill = _illuminant_values(cs.whitepoint_name, wl)
-        w_xyz = np.asarray(tristimulus_weights(wl, ill), dtype=np.float64)
-        w_emissive = np.asarray(tristimulus_weights(wl, None), dtype=np.float64)
-        ill = np.asarray(ill, dtype=np.float64)
+        # One compiled program instead of dozens of eagerly dispatched operations.
+        @jax.jit
+        def compute(wl):
+            ill = _illuminant_values(cs.whitepoint_name, wl)
+            return ill, tristimulus_weights(wl, ill), tristimulus_weights(wl, None)
+
+        ill, w_xyz, w_emissive = (
+            np.asarray(a, np.float64) for a in compute(jnp.asarray(wl_np, dtype=jnp.float64))
+        )
     to_xyz = np.asarray(cs.matrix_RGB_to_XYZ, dtype=np.float64)
     to_rgb = np.asarray(cs.matrix_XYZ_to_RGB, dtype=np.float64)
     w_rgb = w_xyz @ to_rgb.T

@@ -58,7 +58,10 @@ COEFF_2026 = "rgb2spec-2026"
 
 
 class LUTFileError(ValueError):
-    """A coefficient-table file is missing, truncated, corrupt or inconsistent."""
+    """A coefficient-table file is missing, truncated, corrupt or inconsistent.
+
+    Raised by `load_lut` for the table files of thesis section 2.2.3; a `ValueError`.
+    """
 
 
 def checksum(scale: np.ndarray, coeffs: np.ndarray) -> str:
@@ -106,8 +109,8 @@ def save_lut(lut: RGBToSpectrumLUT, path, *, fit_settings: dict | None = None) -
 
     **Arguments:**
 
-    - `lut`: the table.
-    - `path`: file name ending in `.npz` or `.coeff`; written atomically.
+    - `lut`: the table. [nm^-2, nm^-1, -]
+    - `path`: file name ending in `.npz` or `.coeff`; written atomically. [-]
     - `fit_settings`: JSON-able fit settings stored in the `.npz` metadata (e.g.
         `LUTFitResult.settings`).
 
@@ -214,7 +217,7 @@ def load_lut(path, *, with_info: bool = False):
 
     **Arguments:**
 
-    - `path`: a `.npz` or `.coeff` file.
+    - `path`: a `.npz` or `.coeff` file. [-]
     - `with_info`: also return a dict with `format` ("npz", "rgb2spec-2019" or
         "rgb2spec-2026"), `colourspace` and, for `.npz`, the stored `metadata`.
 

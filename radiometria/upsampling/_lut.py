@@ -29,6 +29,7 @@ res - 1) is set to the closed form, and its top node, white, to the finite
 same way): lookups of white itself take the exact grey path.
 """
 
+import functools
 import time
 from typing import Any
 
@@ -55,13 +56,16 @@ from ._fit import (
     target_Lab,
 )
 from ._forward import forward_model
-from ._sigmoid_polynomial import common_float_dtype, normalised_to_nm_coefficients
+from ._sigmoid_polynomial import common_float_dtype
 
 WHITE_C2 = 2048.0  # c2 of the white node (module docstring)
 
 
 def brightness_scale(resolution: int, dtype=np.float64) -> np.ndarray:
-    """pbrt's brightness nodes `smoothstep(smoothstep(k / (res - 1)))`, k = 0 .. res - 1. [-]"""
+    """pbrt's brightness nodes `smoothstep(smoothstep(k / (res - 1)))`, k = 0 .. res - 1. [-]
+
+    The brightness axis of the table of thesis section 2.2.3 (`Pharr2023` section 4.6.6).
+    """
     t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
     ss = lambda u: u * u * (3.0 - 2.0 * u)  # noqa: E731
     return ss(ss(t)).astype(dtype)
@@ -201,6 +205,9 @@ class LUTFitResult(eqx.Module):
     - `num_repaired`: entries that needed the repair pass (static).
     - `seconds`: wall time of the fit, compilation included (static). [s]
     - `settings`: the fit settings, JSON-able (static).
+
+    !!! note "Thesis"
+        Eq. 2.27 and the lookup table of section 2.2.3.
     """
 
     lut: RGBToSpectrumLUT
@@ -258,6 +265,9 @@ class RESULTS(optx.RESULTS):
     `out_of_reach`: above the tolerance at a stationary point of the least-squares problem:
     no sigmoid-polynomial reflectance in [0, 1] reproduces the colour (wide-gamut spaces have
     colours beyond the object-colour solid), and the entry is the best fit.
+
+    ??? cite "References"
+        `Rader2024` (optimistix's `RESULTS`); thesis eq. 2.27.
     """
 
     out_of_reach = (
@@ -269,12 +279,16 @@ class RESULTS(optx.RESULTS):
 def _results_array(code: np.ndarray) -> RESULTS:
     """A `RESULTS` array from integer codes 0 (successful), 1 (max steps), 2 (out of reach)."""
     items = [RESULTS.successful, RESULTS.nonlinear_max_steps_reached, RESULTS.out_of_reach]
+    values = np.asarray([int(it._value) for it in items])[np.asarray(code)]
+    # An enumeration item is a pytree whose one leaf is its integer value.
+    return jax.tree_util.tree_map(lambda v: jnp.asarray(values, v.dtype), items[0])
 
-    def pick(cd):
-        return RESULTS.where(cd == 0, items[0], RESULTS.where(cd == 1, items[1], items[2]))
 
-    flat = jax.vmap(pick)(jnp.asarray(code).ravel())
-    return jax.tree_util.tree_map(lambda a: a.reshape(code.shape), flat)
+def _normalised_to_nm_np(c: np.ndarray) -> np.ndarray:
+    """NumPy twin of `normalised_to_nm_coefficients` (host-side post-processing)."""
+    a, b = 360.0, 1.0 / 470.0
+    A, B, C = c[..., 0], c[..., 1], c[..., 2]
+    return np.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
 
 
 def _stationary(c: np.ndarray, targets: np.ndarray, m: ModelArrays, threshold: float = 1e-2):
@@ -383,12 +397,12 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
         z, how, is_node = xs
         lab_t = target_Lab(e * z, m)
 
-        def warm():
-            a = lm_retarget(s_prev, lab_prev, lab_t)
-            b = lm_retarget(s_k0, lab_k0, lab_t)
-            return jax.tree_util.tree_map(lambda u, v: jnp.where(how == 1, u, v), a, b)
-
-        s0 = lax.cond(how == 0, lambda: lm_init(jnp.zeros((n, 3), dtype), lab_t, m), warm)
+        a = lm_retarget(s_prev, lab_prev, lab_t)
+        b = lm_retarget(s_k0, lab_k0, lab_t)
+        cold = lm_init(jnp.zeros((n, 3), dtype))
+        s0 = jax.tree_util.tree_map(
+            lambda u, v, w: jnp.where(how == 0, w, jnp.where(how == 1, u, v)), a, b, cold
+        )
         limit = jnp.where(how == 0, schedule.n_first, schedule.n_steps)
         n_it, s = lm_solve(
             s0,
@@ -406,7 +420,7 @@ def _fit_columns(e, scale, k0, m, schedule: _Schedule):
 
     # A placeholder state for the carry (replaced at the cold start, step 0).
     zero = jnp.zeros((n, 3), dtype)
-    s_dummy = LMState(zero, zero, jnp.zeros((n, 3, 3), dtype), zero[:, 0], zero[:, 0])
+    s_dummy = lm_init(zero)
     xs = (jnp.asarray(zs, dtype), jnp.asarray(start), jnp.asarray(node >= 0))
     _, (cs, rs, its) = lax.scan(step, (s_dummy, zero, s_dummy, zero), xs)
     # The node rows, in brightness order 1 .. res-1; row 0 = copy of row 1 (placeholder).
@@ -461,15 +475,28 @@ def _make_fit_fn(m: ModelArrays, scale, k0, chunk: int, mesh=None):
     return jax.jit(fn)
 
 
+@functools.lru_cache(maxsize=16)
+def _cached_fit_fn(colourspace: str, step_nm: float, dtype: str, res: int, chunk: int, device_ids):
+    """The compiled column fit for one configuration (cached, so repeated fits skip XLA)."""
+    m = ModelArrays.build(forward_model(colourspace, step_nm=step_nm), jnp.dtype(dtype))
+    scale = jnp.asarray(brightness_scale(res), dtype)
+    mesh = sharding = None
+    if device_ids is not None:  # also for one device: the sharded code path, testable anywhere
+        from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
+
+        by_id = {d.id: d for d in jax.devices()}
+        mesh = Mesh(np.asarray([by_id[i] for i in device_ids]), ("columns",))
+        sharding = NamedSharding(mesh, P("columns"))
+    return _make_fit_fn(m, scale, max(1, res // 5), chunk, mesh), sharding
+
+
 def _repair(coeffs, resid, e, scale, m, tol, exact, n_steps, rounds, chunk):
     """Refit entries above `tol` from their neighbours along brightness (host-driven rounds,
     after the in-block repair; usually nothing is left for it)."""
     res = scale.shape[0]
     n_repaired = 0
     lm = jax.jit(
-        lambda c, lab_t: lm_iterate(
-            lm_init(c, lab_t, m, chunk=chunk), lab_t, m, n_steps, chunk=chunk
-        ),
+        lambda c, lab_t: lm_iterate(lm_init(c), lab_t, m, n_steps + 1, chunk=chunk),
     )
     for _ in range(rounds):
         bad = (resid > tol) & ~exact
@@ -511,10 +538,10 @@ def fit_lut(
     dtype=jnp.float32,
     tolerance: float = DEFAULT_TOLERANCE,
     n_first: int = 60,
-    n_steps: int = 12,
+    n_steps: int = 40,
     min_steps: int = 2,
     n_sub: int = 3,
-    allowed_fraction: float = 2e-3,
+    allowed_fraction: float = 0.0,
     retry_steps: int = 60,
     repair_steps: int = 60,
     repair_rounds: int = 3,
@@ -578,20 +605,16 @@ def fit_lut(
         raise ValueError("`dtype=float64` needs `jax.config.update('jax_enable_x64', True)`.")
     m = ModelArrays.build(model, dtype)
     scale_np = brightness_scale(res)
-    scale = jnp.asarray(scale_np, dtype)
     k0 = max(1, res // 5)
     e_np = _column_directions(res, np.float64)
     n_cols = e_np.shape[0]
     n_dev = 1 if devices is None else len(devices)
     chunk = min(check_positive_int(chunk, "chunk"), -(-n_cols // n_dev))
     blocks_per_call = check_positive_int(blocks_per_call, "blocks_per_call")
-    mesh = sharding = None
-    if devices is not None:  # also for one device: the sharded code path, testable anywhere
-        from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
-
-        mesh = Mesh(np.asarray(devices), ("columns",))
-        sharding = NamedSharding(mesh, P("columns"))
-    fit_fn = _make_fit_fn(m, scale, k0, chunk, mesh)
+    device_ids = None if devices is None else tuple(d.id for d in devices)
+    fit_fn, sharding = _cached_fit_fn(
+        model.colourspace, step_nm, dtype.name, res, chunk, device_ids
+    )
     per_call = n_dev * chunk * blocks_per_call
     sweep_tol = tolerance / 10
 
@@ -621,8 +644,11 @@ def fit_lut(
     exact = np.zeros((res, n_cols), dtype=bool)
     exact[0] = True
     grey_cols = np.flatnonzero((e_np[:, 0] == 1) & (e_np[:, 1] == 1) & (e_np[:, 2] == 1))
-    with jax.enable_x64(dtype == jnp.dtype(jnp.float64)):
-        g = np.array(grey_coefficients(jnp.asarray(scale_np, dtype)))
+    with np.errstate(divide="ignore"):
+        v = scale_np
+        g = np.zeros((res, 3))
+        g[:, 2] = (v - 0.5) / np.sqrt(v * (1.0 - v))  # closed form; -inf at black
+    g[0, 2] = -np.inf  # (row 0 is overwritten by row 1 below)
     g[-1, 2] = WHITE_C2
     coeffs[:, grey_cols] = g[:, None, :]
     resid[:, grey_cols] = 0.0
@@ -660,7 +686,7 @@ def fit_lut(
         progress("repair", 1, 1)
     coeffs[0] = coeffs[1]
 
-    coeffs_nm = np.array(normalised_to_nm_coefficients(jnp.asarray(coeffs)), dtype=dtype)
+    coeffs_nm = _normalised_to_nm_np(np.asarray(coeffs, np.float64)).astype(dtype)
     # (res_k, 3 * res_j * res_i, 3) -> (3, res_k, res_j, res_i, 3)
     table = coeffs_nm.reshape(res, 3, res, res, 3).transpose(1, 0, 2, 3, 4)
     resid_t = resid.reshape(res, 3, res, res).transpose(1, 0, 2, 3)

@@ -28,7 +28,7 @@ from ._sigmoid_polynomial import _evaluate
 
 def roundtrip_grid_rgb(n: int = 33, colourspace="sRGB") -> np.ndarray:
     """Linear RGB (n^3, 3) of the n^3 grid of encoded values decoded with the space's
-    transfer function (float64 NumPy). [-]"""
+    transfer function (float64 NumPy), the test set of thesis section 2.2.3's table. [-]"""
     from ..colorimetry import get_colourspace
 
     n = check_positive_int(n, "grid", minimum=2)
@@ -42,7 +42,10 @@ def roundtrip_grid_rgb(n: int = 33, colourspace="sRGB") -> np.ndarray:
 
 
 def roundtrip_random_rgb(n: int = 100_000, seed: int = 0) -> np.ndarray:
-    """n uniform random linear RGB colours in [0, 1]^3 (float64 NumPy, `numpy` PCG64 `seed`)."""
+    """n uniform random linear RGB colours in [0, 1]^3 (float64 NumPy, PCG64 `seed`). [-]
+
+    The second test set for the table of thesis section 2.2.3.
+    """
     n = check_positive_int(n, "random", minimum=1)
     return np.random.default_rng(seed).random((n, 3))
 

@@ -84,3 +84,25 @@ def cornell_box_xml(width: int, height: int, spp: int = 64) -> str:
 def rel_mse(image: np.ndarray, reference: np.ndarray, eps: float = 1e-2) -> float:
     """Relative MSE, mean of (x - ref)^2 / (ref^2 + eps) over pixels and channels."""
     return float(np.mean((image - reference) ** 2 / (reference**2 + eps)))
+
+
+def cornell_box_materials_xml(width: int, height: int, spp: int = 64) -> str:
+    """The Cornell box with a mirror back wall (smooth `conductor`), a rough gold tall box
+    (`roughconductor`, GGX, alpha 0.2) and a glass short box (`dielectric`, BK7 in air)."""
+    extra = (
+        '  <bsdf type="conductor" id="mirror"/>\n'
+        '  <bsdf type="roughconductor" id="gold"><string name="material" value="Au"/>'
+        '<string name="distribution" value="ggx"/><float name="alpha" value="0.2"/></bsdf>\n'
+        '  <bsdf type="dielectric" id="glass"/>\n'
+    )
+    which = {"back": "mirror", "large-box": "gold", "small-box": "glass"}
+    out, current = [], None
+    for line in cornell_box_xml(width, height, spp).splitlines():
+        if "<shape" in line:
+            current = next((m for shape, m in which.items() if f'id="{shape}"' in line), None)
+        if current and '<ref id="white"/>' in line:
+            line = line.replace('"white"', f'"{current}"')
+        if '<bsdf type="diffuse" id="white">' in line:
+            out.append(extra.rstrip("\n"))
+        out.append(line)
+    return "\n".join(out) + "\n"

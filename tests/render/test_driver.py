@@ -118,3 +118,70 @@ def test_render_refuses_absurd_resolution_before_allocating(box):
     with pytest.raises(ValueError, match="GiB|too large"):
         render(scene, camera=huge, spp=1, progress=False)
     assert time.perf_counter() - t0 < 5.0  # refused up front, nothing rendered or allocated
+
+
+@pytest.mark.slow
+def test_render_measured_cornell_box_fully_spectral():
+    """`cornell-box-measured`: measured reflectance and light spectra, no RGB upsampling."""
+    from radiometria.render import compile_scene, load_scene, wavelength_grid_nm
+
+    description = load_scene("cornell-box-measured")
+    scene, _, _ = compile_scene(description, width=16, height=16)
+    grid = wavelength_grid_nm()
+    for row, material in enumerate(description.materials):
+        wl, values = material.params["reflectance"]["spectrum"]
+        expected = np.interp(grid, wl, values, left=0.0, right=0.0)
+        np.testing.assert_allclose(
+            np.asarray(scene.materials.reflectance.values[row]), expected, atol=1e-6
+        )
+    wl, values = description.emitters[0].radiance["spectrum"]
+    np.testing.assert_allclose(
+        np.asarray(scene.radiance.values[0]), np.interp(grid, wl, values, 0, 0), rtol=1e-6
+    )
+    img = np.asarray(render(description, spp=4, width=16, height=16, progress=False))
+    assert img.shape == (16, 16, 3) and np.all(np.isfinite(img)) and img.mean() > 0
+
+
+@pytest.mark.slow
+def test_render_multi_process_matches_one_process(tmp_path):
+    """Two processes joined by `jax.distributed` (CPU, gloo) render alternate steps and sum
+    their films: every process returns the single-process image."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    script = textwrap.dedent(
+        f"""
+        import sys, jax, numpy as np
+        jax.config.update("jax_cpu_collectives_implementation", "gloo")
+        pid = int(sys.argv[1])
+        jax.distributed.initialize("127.0.0.1:{port}", num_processes=2, process_id=pid)
+        from radiometria.render import render
+        from tests.render._synthetic import lit_box_camera, lit_box_scene
+        img = render(lit_box_scene(), camera=lit_box_camera(), spp=4, max_depth=3, seed=5,
+                     batch=64, progress=False)
+        np.save(r"{tmp_path}/part" + str(pid) + ".npy", np.asarray(img))
+        """
+    )
+    env = {**os.environ, "JAX_PLATFORMS": "cpu"}
+    env.pop("XLA_FLAGS", None)
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", script, str(i)],
+            cwd=ROOT,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )  # fmt: skip
+        for i in range(2)
+    ]
+    outputs = [p.communicate(timeout=600)[0] for p in procs]
+    assert all(p.returncode == 0 for p in procs), "\n".join(outputs)
+    scene, cam = lit_box_scene(), lit_box_camera()
+    one = np.asarray(
+        render(scene, camera=cam, spp=4, max_depth=3, seed=5, batch=64, progress=False)
+    )
+    for i in range(2):
+        np.testing.assert_allclose(np.load(tmp_path / f"part{i}.npy"), one, rtol=1e-5, atol=1e-6)

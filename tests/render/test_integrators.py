@@ -2,11 +2,12 @@
 
 import math
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from radiometria.camera import PinholeCamera
-from radiometria.render import RenderScene, render
+from radiometria.render import RenderScene, SpectrumTable, render, wavelength_grid_nm
 
 from ._synthetic import constant_table, inward_cube, merge, quad
 
@@ -82,3 +83,107 @@ def test_direct_irradiance_under_rectangle_light(integrator):
     )
     expected = albedo / math.pi * _irradiance_below_rectangle_centre(a, b, h, le)
     assert np.mean(xyz[..., 1]) == pytest.approx(expected, rel=5e-3)
+
+
+def _emitter_in_view():
+    """A large one-sided quad light filling a narrow camera's view (seen from its front)."""
+    v, f = quad([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]])  # normal +z
+    cam = PinholeCamera.from_look_at(
+        np.array([0.0, 0, 2]), np.zeros(3), np.array([0.0, 1, 0]), 10.0, 8, 8
+    )
+    return v, f, cam
+
+
+@pytest.mark.slow
+def test_blackbody_emitter_seen_directly():
+    """A blackbody light (thesis eq. 1.24) seen directly: Y = s int B(l, T) ybar / int ybar."""
+    from radiometria.colorimetry import get_cmfs
+    from radiometria.render._spectral import spectrum_values
+
+    temperature, scale = 4000.0, 1e-4
+    values = spectrum_values(
+        {"blackbody": {"temperature": temperature, "scale": scale}}, "illuminant"
+    )
+    grid = wavelength_grid_nm()
+    cmfs = get_cmfs()
+    ybar = np.interp(grid, np.asarray(cmfs.wavelengths_nm), np.asarray(cmfs.values)[:, 1])
+    expected = np.trapezoid(values * ybar, grid) / np.trapezoid(ybar, grid)
+    v, f, cam = _emitter_in_view()
+    table = SpectrumTable(jnp.asarray(values[None], jnp.float32))
+    scene = RenderScene.from_triangles(v, f, [0, 0], constant_table(0.0), [0, 0], table)
+    xyz = render(scene, camera=cam, spp=64, max_depth=1, progress=False, return_xyz=True)
+    assert np.mean(xyz[..., 1]) == pytest.approx(expected, rel=5e-3)
+
+
+def test_spectrum_values_forms():
+    """Scene spectra on the 1 nm grid: tabulated (zero outside), constant, blackbody, RGB."""
+    from radiometria.radiometry import planck
+    from radiometria.render._spectral import spectrum_values
+
+    grid = wavelength_grid_nm()
+    tab = spectrum_values({"spectrum": (np.array([400.0, 500.0]), np.array([1.0, 3.0]))}, "albedo")
+    np.testing.assert_allclose(tab[grid == 450.0], 2.0)
+    assert tab[grid == 399.0] == 0.0 and tab[grid == 501.0] == 0.0
+    np.testing.assert_allclose(spectrum_values({"value": 0.25}, "albedo"), 0.25)
+    bb = spectrum_values({"blackbody": {"temperature": 5000.0, "scale": 2.0}}, "illuminant")
+    np.testing.assert_allclose(bb, 2.0 * np.asarray(planck(grid, 5000.0)), rtol=1e-6)
+    grey = spectrum_values({"rgb": np.array([0.5, 0.5, 0.5])}, "albedo")
+    np.testing.assert_allclose(grey, 0.5, atol=1e-3)
+    with pytest.raises(ValueError, match="reflectance"):
+        spectrum_values({"rgb": np.array([1.5, 0.2, 0.2])}, "albedo")
+    with pytest.raises(ValueError, match="form"):
+        spectrum_values({"texture": "wood.png"}, "albedo")
+
+
+def test_sample_hero_wavelengths_stratified_and_unbiased():
+    """Four wavelengths per variate, rotated by 1/4 in the CDF; E[1/p] = 830 - 360 nm."""
+    import jax
+
+    from radiometria.montecarlo import invert_visible_wavelengths_sample
+    from radiometria.render import sample_hero_wavelengths
+
+    u = jax.random.uniform(jax.random.key(0), (200_000,), dtype=jnp.float64)
+    wl, pdf = sample_hero_wavelengths(u)
+    assert wl.shape == pdf.shape == (200_000, 4)
+    assert np.all((np.asarray(wl) >= 360.0) & (np.asarray(wl) <= 830.0))
+    cdf = np.asarray(invert_visible_wavelengths_sample(wl))
+    np.testing.assert_allclose(
+        np.mod(cdf - cdf[:, :1], 1.0), [[0, 0.25, 0.5, 0.75]] * len(u), atol=1e-6
+    )
+    assert np.mean(1.0 / np.asarray(pdf)) == pytest.approx(470.0, rel=2e-3)
+
+
+def test_path_radiance_takes_a_sample_array():
+    """The array form of `u`: its shape is checked; max_depth 1 returns emission only."""
+    from radiometria.render import path_radiance, sample_dimensions
+
+    v, f, cam = _emitter_in_view()
+    scene = RenderScene.from_triangles(
+        v, f, [0, 0], constant_table(0.5), [0, 0], constant_table(2.0)
+    )
+    o = jnp.asarray([[0.0, 0, 2], [0.0, 0, 2]], jnp.float32)
+    d = jnp.asarray([[0.0, 0, -1], [0.0, 0, 1]], jnp.float32)  # the light, then away from it
+    wl = jnp.full((2, 4), 550.0, jnp.float32)
+    assert sample_dimensions(1) == 0 and sample_dimensions(3) == 16
+    out = path_radiance(scene, o, d, wl, jnp.zeros((2, 0), jnp.float32), max_depth=1)
+    np.testing.assert_allclose(np.asarray(out), [[2.0] * 4, [0.0] * 4])
+    u = jnp.full((2, sample_dimensions(3)), 0.5, jnp.float32)
+    out = path_radiance(scene, o, d, wl, u, max_depth=3)
+    np.testing.assert_allclose(np.asarray(out), [[2.0] * 4, [0.0] * 4])  # nothing to reflect
+    with pytest.raises(ValueError, match="u"):
+        path_radiance(scene, o, d, wl, jnp.zeros((2, 5), jnp.float32), max_depth=3)
+    with pytest.raises(ValueError, match="max_depth"):
+        path_radiance(scene, o, d, wl, u, max_depth=0)
+
+
+@pytest.mark.slow
+def test_scene_without_emitters_renders_black():
+    v, f = inward_cube()
+    zero = np.zeros(len(f), int)
+    no_light = SpectrumTable(jnp.zeros((0, wavelength_grid_nm().shape[0]), jnp.float32))
+    scene = RenderScene.from_triangles(v, f, zero, constant_table(0.5), zero - 1, no_light)
+    cam = PinholeCamera.from_look_at(
+        np.zeros(3), np.array([0.0, 0, 1]), np.array([0.0, 1, 0]), 60.0, 8, 8
+    )
+    img = np.asarray(render(scene, camera=cam, spp=2, max_depth=3, progress=False))
+    np.testing.assert_array_equal(img, 0.0)
