@@ -55,8 +55,12 @@ SUBPACKAGES = [
     "radiometry", "photometry", "colorimetry", "upsampling", "montecarlo", "scattering",
     "camera", "render",
 ]  # fmt: skip
-_EQ = re.compile(r"[Ee]q(?:s|uations?)?\.?\s*\(?(\d\.\d+)\)?(?:\s*(?:-|–|to|and)\s*\(?(\d\.\d+)\)?)?")
-_SEC = re.compile(r"(?:[Ss]ection|[Ss]ec\.|§|ch\.|[Cc]hapter|[Aa]pp(?:endix|\.)?)\s*([1-9A-E](?:\.\d+){0,2})")
+_EQ = re.compile(
+    r"[Ee]q(?:s|uations?)?\.?\s*\(?(\d\.\d+)\)?(?:\s*(?:-|–|to|and)\s*\(?(\d\.\d+)\)?)?"
+)
+_SEC = re.compile(
+    r"(?:[Ss]ection|[Ss]ec\.|§|ch\.|[Cc]hapter|[Aa]pp(?:endix|\.)?)\s*([1-9A-E](?:\.\d+){0,2})"
+)
 _KEY = re.compile(r"`([A-Z][A-Za-z\-]+\d{4}[a-z]?)`")
 
 
@@ -180,14 +184,19 @@ def merged_bib() -> str:
 def references_markdown(bib_text: str) -> str:
     lines = ["# References", "", "Rendered from `docs/references.bib` by `docs/_gen.py`.", ""]
     for key, f in sorted(parse_bib(bib_text).items(), key=lambda kv: kv[0].lower()):
-        venue = f.get("journal") or f.get("booktitle") or f.get("publisher") or f.get("howpublished", "")
+        venue = (
+            f.get("journal")
+            or f.get("booktitle")
+            or f.get("publisher")
+            or f.get("howpublished", "")
+        )
         parts = [f.get("author", ""), f"*{f.get('title', '')}*", venue, f.get("year", "")]
         text = ". ".join(p for p in parts if p)
         if "doi" in f:
             text += f". doi:{f['doi']}"
         elif "url" in f:
             text += f". <{f['url']}>"
-        lines.append(f"- <a id=\"{key}\"></a>**{key}**: {text}.")
+        lines.append(f'- <a id="{key}"></a>**{key}**: {text}.')
     return "\n".join(lines) + "\n"
 
 

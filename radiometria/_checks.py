@@ -114,7 +114,9 @@ def check_choice(value: str, name: str, valid: Iterable[str]) -> str:
     """Static check: `value` must be one of `valid`; the message lists the valid names."""
     valid = list(valid)
     if value not in valid:
-        raise ValueError(f"Unknown {name} {value!r}; valid values are: {', '.join(map(repr, valid))}.")
+        raise ValueError(
+            f"Unknown {name} {value!r}; valid values are: {', '.join(map(repr, valid))}."
+        )
     return value
 
 

@@ -11,6 +11,7 @@ Each long task shows a progress bar on stderr (tqdm).
 """
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -71,6 +72,13 @@ def build_parser() -> argparse.ArgumentParser:
         prog="radiometria",
         description="Radiometry, colorimetry and Monte Carlo in JAX, and a spectral path tracer.",
     )
+    parser.add_argument(
+        "--cpu-devices",
+        type=int,
+        default=None,
+        metavar="N",
+        help="XLA CPU devices to shard renders over [one per core; XLA_FLAGS wins if it sets it]",
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("figures", help="write every thesis figure (PNG and PDF)")
@@ -110,10 +118,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _configure_cpu_devices(count: int | None) -> None:
+    """Give XLA `count` CPU devices (default: one per core), so renders shard over all cores.
+
+    Sets `--xla_force_host_platform_device_count` in `XLA_FLAGS` unless it is already set there.
+    It takes effect only if JAX has not initialised its backends yet (true when the command
+    starts); accelerators, when present, are used as they are.
+    """
+    flags = os.environ.get("XLA_FLAGS", "")
+    if "xla_force_host_platform_device_count" in flags:
+        return
+    count = count or os.cpu_count() or 1
+    os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the `radiometria` command; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.cpu_devices is not None and args.cpu_devices < 1:
+        parser.error(f"--cpu-devices must be a positive integer, got {args.cpu_devices}")
+    _configure_cpu_devices(args.cpu_devices)
     try:
         return int(args.func(args) or 0)
     except (ValueError, TypeError, OSError) as err:

@@ -102,3 +102,23 @@ def test_demo_render_smoke(tmp_path):
     assert [p.name for p in paths] == ["cornell_box.exr", "cornell_box.png"]
     rgb, _ = read_exr(paths[0])
     assert rgb.shape == (32, 32, 3) and np.all(np.isfinite(rgb))
+
+
+def test_cpu_devices_flag_sets_xla_count_once(monkeypatch):
+    from radiometria.cli import _configure_cpu_devices
+
+    monkeypatch.setenv("XLA_FLAGS", "--xla_dump_to=/tmp/none")
+    _configure_cpu_devices(3)
+    assert os.environ["XLA_FLAGS"].split() == [
+        "--xla_dump_to=/tmp/none",
+        "--xla_force_host_platform_device_count=3",
+    ]
+    _configure_cpu_devices(5)  # a count already in XLA_FLAGS wins
+    assert os.environ["XLA_FLAGS"].count("device_count") == 1
+
+
+def test_cpu_devices_must_be_positive(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--cpu-devices", "0", "figures", "--out", "unused"])
+    assert exc.value.code == 2
+    assert "--cpu-devices" in capsys.readouterr().err

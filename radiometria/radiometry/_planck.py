@@ -7,16 +7,20 @@ promised domain (wavelength 1 nm to 1 mm, temperature 1 K to 1e6 K) `x` spans 1.
 so `exp(x)` overflows float32 from x = 88.7 and float64 from x = 709, while the radiance itself
 is still representable well past those points. `_prefactor_over_expm1` therefore evaluates
 
-- the direct form `A / expm1(x)` for `x <= _X_SWITCH` (where `expm1` is accurate and neither
-  it nor its square, which appears in the derivative, can overflow), and
-- the logarithmic form `exp(log A - x) / (1 - exp(-x))` beyond, which underflows gracefully to
-  0 instead of dividing by `inf`.
+- the direct form `A / expm1(x)` for `x <= x_s` (where `expm1` is accurate and neither it nor
+  its square, which appears in the derivative, can overflow), and
+- the Wien form `exp(log A - x)` beyond, which underflows gracefully to 0 instead of dividing
+  by `inf`. The switch `x_s` (37 in float64, 18 in float32) is where `exp(-x)` drops below half
+  an ulp of 1, so the dropped factor `1 / (1 - exp(-x))` of the exact law rounds to 1 anyway.
 
 Each branch only ever sees an `x` clamped into its own half (the double-where trick), so the
 branch that `jnp.where` discards has finite values and finite derivatives: gradients are finite
-everywhere in the domain, in float32 and float64. Wavelengths enter in nm and stay in nm: the
-nm-to-m conversion is folded once into the Python-float constants below, so no intermediate
-(like `lambda^5` in m^5 = 1e-45) leaves the float32 range.
+everywhere in the domain, in float32 and float64. Per point that is two exponentials; the
+prefactor and its logarithm depend on the wavelength only and are computed before broadcasting
+against the temperatures, so a spectrum-by-temperature grid pays for them once per wavelength.
+Wavelengths enter in nm and stay in nm: the nm-to-m conversion is folded once into the
+Python-float constants below, so no intermediate (like `lambda^5` in m^5 = 1e-45) leaves the
+float32 range.
 """
 
 import math
@@ -45,40 +49,51 @@ _C1L_THZ = 2.0 * _c.PLANCK / _c.SPEED_OF_LIGHT**2 * _HZ_PER_THZ**3  # W sr^-1 m^
 _LOG_C1L_THZ = math.log(_C1L_THZ)
 _H_OVER_K = _c.PLANCK / _c.BOLTZMANN  # K s (K Hz^-1)
 
-# Branch point of `_prefactor_over_expm1`: exp(20)^2 = 2.4e17 is far from float32 overflow.
-_X_SWITCH = 20.0
+# Branch points of `_prefactor_over_expm1`, per dtype: exp(-x_s) < eps / 2, and exp(x_s)^2 (in
+# the derivative of the direct form) is far from overflow (float32: exp(36) = 4e15).
+_X_SWITCH_F64 = 37.0
+_X_SWITCH_F32 = 18.0
 
 
 _WIEN_FREQUENCY_DISPLACEMENT = _c.WIEN_FREQUENCY_DISPLACEMENT  # Hz K^-1
 _WIEN_DISPLACEMENT_NM = _c.WIEN_DISPLACEMENT * _c.NM_PER_M  # nm K, about 2.8978e6
 
 
+def _same_rank(a: Array, b: Array) -> tuple[Array, Array]:
+    """`a` and `b` with leading unit axes added to the lower-rank one (NumPy broadcasting made
+    explicit, so it also holds under `jax_numpy_rank_promotion="raise"`), shapes unchanged."""
+    nd = max(a.ndim, b.ndim)
+    return a.reshape((1,) * (nd - a.ndim) + a.shape), b.reshape((1,) * (nd - b.ndim) + b.shape)
+
+
 def _prefactor_over_expm1(prefactor: Array, log_prefactor: Array, x: Array) -> Array:
     """`prefactor / expm1(x)` for x > 0, without overflow and with finite gradients.
 
-    `log_prefactor` must equal `log(prefactor)`; it is used where `exp(x)` could overflow.
+    `log_prefactor` must equal `log(prefactor)`; it is used where `exp(x)` could overflow. The
+    result has the broadcast shape of the three arguments.
     """
-    small = x <= _X_SWITCH
-    # The direct branch never sees a large x, the logarithmic one never a small x. (`where`,
-    # not `minimum`/`maximum`: those pass half the gradient each way at a tie, x = 20.)
-    x_small = jnp.where(small, x, _X_SWITCH)
-    x_large = jnp.where(small, _X_SWITCH, x)
-    direct = prefactor / jnp.expm1(x_small)
-    # 1 / (e^x - 1) = e^-x / (1 - e^-x); the numerator is formed in log space so that a huge
-    # prefactor times a tiny e^-x does not underflow early (or overflow) in float32.
-    logarithmic = jnp.exp(log_prefactor - x_large) / -jnp.expm1(-x_large)
-    return jnp.where(small, direct, logarithmic)
+    dtype = jnp.result_type(prefactor, x)
+    switch = _X_SWITCH_F64 if dtype == jnp.float64 else _X_SWITCH_F32
+    small = x <= switch
+    # The direct branch never sees a large x, the Wien one never a small x. (`where`, not
+    # `minimum`/`maximum`: those pass half the gradient each way at a tie.)
+    direct = prefactor / jnp.expm1(jnp.where(small, x, switch))
+    # A e^-x / (1 - e^-x) with 1 - e^-x = 1 to the last bit past the switch; the exponent is
+    # formed in log space so that a huge A times a tiny e^-x does not underflow early.
+    wien = jnp.exp(log_prefactor - jnp.where(small, switch, x))
+    return jnp.where(small, direct, wien)
 
 
 @eqx.filter_jit  # compiled once per shape/dtype for eager callers; inlined under an outer jit
 def _planck_nm(wavelength_nm: Array, temperature: Array) -> Array:
     wavelength_nm = check_positive(wavelength_nm, "wavelength_nm", "nm")
     temperature = check_positive(temperature, "temperature", "K")
-    wavelength_nm, temperature = jnp.broadcast_arrays(wavelength_nm, temperature)
-    # Second radiation constant term x = h c / (lambda k T) = c_2 / (lambda T)
-    x = _C2_NM / (wavelength_nm * temperature)
+    wavelength_nm, temperature = _same_rank(wavelength_nm, temperature)
+    # Per wavelength, before broadcasting against the temperatures (see the module notes).
     prefactor = _C1L_NM * wavelength_nm**-5
     log_prefactor = _LOG_C1L_NM - 5.0 * jnp.log(wavelength_nm)
+    # Second radiation constant term x = h c / (lambda k T) = c_2 / (lambda T)
+    x = _C2_NM / (wavelength_nm * temperature)
     return _prefactor_over_expm1(prefactor, log_prefactor, x)
 
 
@@ -86,11 +101,11 @@ def _planck_nm(wavelength_nm: Array, temperature: Array) -> Array:
 def _planck_hz(frequency_hz: Array, temperature: Array) -> Array:
     frequency_hz = check_positive(frequency_hz, "frequency_hz", "Hz")
     temperature = check_positive(temperature, "temperature", "K")
-    frequency_hz, temperature = jnp.broadcast_arrays(frequency_hz, temperature)
-    x = _H_OVER_K * frequency_hz / temperature  # x = h nu / (k T)
-    nu_thz = frequency_hz / _HZ_PER_THZ
+    frequency_hz, temperature = _same_rank(frequency_hz, temperature)
+    nu_thz = frequency_hz / _HZ_PER_THZ  # per frequency, before broadcasting
     prefactor = _C1L_THZ * nu_thz**3
     log_prefactor = _LOG_C1L_THZ + 3.0 * jnp.log(nu_thz)
+    x = _H_OVER_K * frequency_hz / temperature  # x = h nu / (k T)
     return _prefactor_over_expm1(prefactor, log_prefactor, x)
 
 

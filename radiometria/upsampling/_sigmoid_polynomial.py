@@ -208,7 +208,7 @@ class SigmoidPolynomialSpectrum(AbstractSpectrum):
     - `coeffs`: (*batch, 3) nm coefficients. [nm^-2, nm^-1, dimensionless]
 
     Calling with `wavelength_nm` of shape (..., n_lambda) returns
-    `broadcast((*batch, 1), (..., n_lambda))` values in [0, 1] [dimensionless].
+    `broadcast((*batch, 1), (..., n_lambda))` values in [0, 1], [dimensionless].
 
     !!! note "Thesis"
         Eq. 2.25-2.26 and figure 2.4, section 2.2.3.
