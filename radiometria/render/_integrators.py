@@ -27,6 +27,24 @@ every shape stays static. Random numbers come
 in as one array `u` of shape `(rays, sample_dimensions(max_depth))`, so independent and
 quasi-random samplers feed the same code.
 
+**Derivatives.** Radiance estimates are differentiable in the scene's spectra (reflectance and
+emission rows of the `SpectrumTable`s, hence in the RGB colours or temperatures they are
+computed from): for fixed variates `u` (common random numbers) the estimate is a smooth
+function of them, since the sampling decisions (cosine-weighted BSDF samples, the light
+distribution of next-event estimation, fixed when the scene is compiled) do not depend on
+them. Forward mode (`jax.jvp`, `jax.jacfwd`) works through the compacted loop. Reverse mode
+(`jax.grad`, `jax.vjp`) cannot pass through a loop whose trip count is traced (the number of
+live chunks), so `path_radiance(..., compact=False)` traces every path of the batch in each
+segment (paths already terminated are traced too and their results discarded), a loop of
+static length that reverse mode differentiates. Russian roulette's survival probability is a
+sampling decision: its derivative is detached (`lax.stop_gradient`, as Mitsuba 3's
+differentiable integrators `dr.detach` it), so the derivative of a surviving path is
+$\partial(\beta/q) = \partial\beta / q$, whose expectation is the derivative of the
+expectation. (The derivative of the estimate for fixed `u` would add $-\beta\,\partial q/q^2$
+and miss the jump where the decision flips, a biased gradient.) Without roulette
+(`rr_depth >= max_depth`) the derivative is exactly that of the estimate for fixed `u`, which
+`tests/render/test_gradients.py` checks against central finite differences.
+
 Per bounce the eight variates are used as `[light point u0, u1 | BSDF u0, u1 | light choice,
 BSDF lobe | roulette, unused]`, so each 2D sample is one aligned pair of dimensions (what a
 padded Sobol sampler stratifies).
@@ -139,6 +157,7 @@ def path_radiance(
     rr_depth: int = 5,
     chunk: int | None = None,
     active: Bool[Array, " n"] | None = None,
+    compact: bool = True,
 ) -> Float[Array, "n k"]:
     r"""Spectral radiance arriving along each ray, by path tracing with NEE, MIS and roulette.
 
@@ -160,6 +179,10 @@ def path_radiance(
         on it.
     - `active`: optional `(n,)` booleans; paths where it is False are not traced at all
         (they cost nothing and return 0).
+    - `compact`: trace only the live paths of each segment (default). `False` traces every
+        path in every segment and discards the results of terminated ones: the same estimate
+        (up to float rounding), slower once paths terminate, but differentiable in reverse
+        mode (`jax.grad`); forward mode (`jax.jacfwd`) works either way (module docstring).
 
     **Returns:**
 
@@ -179,6 +202,8 @@ def path_radiance(
         raise ValueError(f"`max_depth` must be an int >= 1, got {max_depth!r}.")
     if isinstance(rr_depth, bool) or not isinstance(rr_depth, int) or rr_depth < 1:
         raise ValueError(f"`rr_depth` must be an int >= 1, got {rr_depth!r}.")
+    if not isinstance(compact, bool):
+        raise TypeError(f"`compact` must be a bool, got {compact!r}.")
     n_rays = origins.shape[0]
     if callable(u):
         sample = u
@@ -213,6 +238,36 @@ def path_radiance(
     chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)
     n_pad = -(-n_rays // chunk) * chunk
 
+    def one_segment_all(state: _PathState, b):
+        # Every path, live or not: a loop of static length, which reverse mode differentiates.
+        # Terminated paths get a harmless ray and zero throughput, so that their (discarded)
+        # computation stays finite and passes no NaN into the cotangents.
+        alive = state.alive
+        traced = eqx.tree_at(
+            lambda s: (s.o, s.d, s.beta),
+            state,
+            (
+                jnp.where(alive[:, None], state.o, 0.0),
+                jnp.where(alive[:, None], state.d, jnp.asarray([0.0, 0.0, 1.0], dtype)),
+                jnp.where(alive[:, None], state.beta, 0.0),
+            ),
+        )
+        paths = jnp.arange(n_rays, dtype=jnp.int32)
+        new = _segment(
+            scene,
+            traced,
+            wavelength_nm,
+            functools.partial(sample, b, paths),
+            b,
+            max_depth=max_depth,
+            rr_depth=rr_depth,
+        )
+
+        def keep(x, old):
+            return jnp.where(alive.reshape(alive.shape + (1,) * (x.ndim - 1)), x, old)
+
+        return jax.tree.map(keep, new, state), None
+
     def one_segment(state: _PathState, b):
         # Stream compaction: only live paths are traced, in chunks of static size, so the
         # work per segment follows the number of live paths, not the batch.
@@ -236,7 +291,7 @@ def path_radiance(
         return jax.lax.fori_loop(0, n_chunks, one_chunk, state), None
 
     segments = jnp.arange(max_depth, dtype=jnp.int32)
-    state, _ = jax.lax.scan(one_segment, state, segments)
+    state, _ = jax.lax.scan(one_segment if compact else one_segment_all, state, segments)
     # A path through a dispersive interface kept only its hero wavelength: its estimate is the
     # hero's alone, weighted as one wavelength out of k (pbrt's `TerminateSecondary`).
     hero = jnp.zeros((1, k), dtype).at[0, 0].set(k)
@@ -346,7 +401,8 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     # Russian roulette: survive with probability q = min(max_lambda beta eta^2, 0.95);
     # survivors are reweighted by 1/q (Mitsuba's rule).
     eta_scale = state.eta_scale * jnp.where(bs.is_transmission, bs.eta * bs.eta, 1.0)
-    q = jnp.minimum(jnp.max(beta, axis=-1) * eta_scale, 0.95)
+    # q is a sampling decision: its derivative is detached (module docstring, "Derivatives").
+    q = jax.lax.stop_gradient(jnp.minimum(jnp.max(beta, axis=-1) * eta_scale, 0.95))
     alive = alive & (~roulette | (u_b[:, 6] < q))
     beta = jnp.where(alive[:, None], beta / jnp.where(alive & roulette, q, 1.0)[:, None], 0.0)
     return _PathState(
