@@ -27,8 +27,12 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from .._checks import check_choice, check_positive_int
+from .._checks import check_positive_int
 from .._types import Float, Key
+from ._samplers import (
+    _check_sequence_options,
+    _lowbias32 as _mix32,  # pbrt's MixBits, 32-bit
+)
 
 SCRAMBLES = (None, "none", "permutation", "owen")
 
@@ -45,15 +49,6 @@ def first_primes(d: int) -> np.ndarray:
         if sieve[p]:
             sieve[p * p :: p] = False
     return np.flatnonzero(sieve)[:d].astype(np.int64)
-
-
-def _mix32(x: Array) -> Array:
-    """A 32-bit integer finaliser (Wellons' `lowbias32`), standing in for pbrt's 64-bit MixBits."""
-    x = x ^ (x >> np.uint32(16))
-    x = x * np.uint32(0x7FEB352D)
-    x = x ^ (x >> np.uint32(15))
-    x = x * np.uint32(0x846CA68B)
-    return x ^ (x >> np.uint32(16))
 
 
 def permutation_element(i: Array, n: Array, seed: Array) -> Array:
@@ -278,18 +273,7 @@ def halton(
     skip = check_positive_int(skip, "skip", minimum=0)
     if skip + n > 2**31:
         raise ValueError(f"`skip + n` = {skip + n} exceeds 2^31 points.")
-    if scramble is not None:
-        check_choice(scramble, "scramble", [s for s in SCRAMBLES if s is not None])
-    scramble = None if scramble == "none" else scramble
-    if scramble is not None and key is None:
-        raise ValueError(f"scramble={scramble!r} needs a `key`.")
-    if scramble is None and key is not None:
-        raise ValueError(
-            "A `key` was given but `scramble` is None; pass scramble='owen' (or another)."
-        )
-    dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
-    if not jnp.issubdtype(dtype, jnp.floating):
-        raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
+    scramble, dtype = _check_sequence_options(scramble, key, dtype, SCRAMBLES)
     if scramble is None:
         # `start` is a run-time argument: a fully constant input would be constant-folded by
         # XLA with a different rounding than SciPy's loop.

@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from .._checks import check_positive_int
+from .._checks import check_choice, check_positive_int
 from .._types import Float, Key
 
 
@@ -22,6 +22,23 @@ def _dtype(dtype):
     if not jnp.issubdtype(dtype, jnp.floating):
         raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
     return dtype
+
+
+def _check_sequence_options(scramble, key, dtype, scrambles: tuple):
+    """Validate the `scramble`, `key` and `dtype` arguments shared by `halton` and `sobol`.
+
+    Returns `(scramble, dtype)` with `"none"` mapped to None and `dtype` resolved.
+    """
+    if scramble is not None:
+        check_choice(scramble, "scramble", [s for s in scrambles if s is not None])
+    scramble = None if scramble == "none" else scramble
+    if scramble is not None and key is None:
+        raise ValueError(f"scramble={scramble!r} needs a `key`.")
+    if scramble is None and key is not None:
+        raise ValueError(
+            "A `key` was given but `scramble` is None; pass scramble='owen' (or another)."
+        )
+    return scramble, _dtype(dtype)
 
 
 def _below_one(x: Array) -> Array:

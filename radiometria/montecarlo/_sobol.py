@@ -29,8 +29,9 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from .._checks import check_choice, check_positive_int
+from .._checks import check_positive_int
 from .._types import Float, Key
+from ._samplers import _check_sequence_options
 
 DATA = Path(__file__).parent / "data" / "sobol_joe_kuo_6_21201.npz"
 MAX_DIMENSION = 21201
@@ -233,18 +234,7 @@ def sobol(
             f"`n` = {n} is not a power of two, so the Sobol points are not balanced; use "
             f"n = {1 << (n - 1).bit_length()} or pass `allow_unbalanced=True`."
         )
-    if scramble is not None:
-        check_choice(scramble, "scramble", [s for s in SCRAMBLES if s is not None])
-    scramble = None if scramble == "none" else scramble
-    if scramble is not None and key is None:
-        raise ValueError(f"scramble={scramble!r} needs a `key`.")
-    if scramble is None and key is not None:
-        raise ValueError(
-            "A `key` was given but `scramble` is None; pass scramble='owen' (or another)."
-        )
-    dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
-    if not jnp.issubdtype(dtype, jnp.floating):
-        raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
+    scramble, dtype = _check_sequence_options(scramble, key, dtype, SCRAMBLES)
     return _sobol_points(n, d, scramble, skip, dtype, key)
 
 
