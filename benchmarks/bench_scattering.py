@@ -8,34 +8,53 @@ pass that compiles). Our BxDFs carry 4 wavelengths (hero-wavelength rendering), 
 variant 3 channels. Microfacet models use the separable Smith masking on both sides, so both
 compute the same model.
 
-Mitsuba's LLVM variants need libLLVM (Debian: `apt-get install libllvm19`), found via
-`DRJIT_LIBLLVM_PATH`; if it cannot be loaded the benchmark falls back to `scalar_rgb` on a
-small subset and says so.
+Mitsuba's LLVM variants need libLLVM >= 16 (Debian: `apt-get install libllvm19`; without root,
+`apt-get download libllvm19 && dpkg -x libllvm19_*.deb DIR` and point `DRJIT_LIBLLVM_PATH` at
+`DIR/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1`). Without `DRJIT_LIBLLVM_PATH` the newest system
+libLLVM >= 16 is used (Dr.Jit rejects 14, and 15 aborts the process in code generation); if none
+loads, the benchmark falls back to `scalar_rgb` on a small subset and says so.
 
-Run: `python benchmarks/bench_scattering.py [--n 10000000] [--batch 1000000] [--repeats 3]`.
+`--tuned-malloc` re-runs the benchmark with glibc's allocator told to keep freed memory
+(`MALLOC_MMAP_THRESHOLD_`, `MALLOC_TRIM_THRESHOLD_`, `MALLOC_TOP_PAD_`). XLA's CPU client
+allocates every output and temporary buffer afresh, and by default glibc maps large blocks
+from the OS and unmaps them on free, so each batch page-faults some 80 MB of new memory;
+Dr.Jit reuses memory through its own caching allocator. The option removes that harness cost
+from our side; the BxDF code is the same either way.
+
+Run: `python benchmarks/bench_scattering.py [--n 10000000] [--batch 1000000] [--repeats 3]
+[--tuned-malloc]`.
 """
 
 import argparse
 import glob
 import os
+import re
+import sys
 import time
 
 import numpy as np
 
+_MALLOC_ENV = {
+    "MALLOC_MMAP_THRESHOLD_": str(1 << 32),
+    "MALLOC_TRIM_THRESHOLD_": str(1 << 34),
+    "MALLOC_TOP_PAD_": str(1 << 30),
+}
+
 
 def _find_libllvm() -> str | None:
+    """The newest system libLLVM Dr.Jit can use (major version >= 16), or None."""
     if os.environ.get("DRJIT_LIBLLVM_PATH"):
         return os.environ["DRJIT_LIBLLVM_PATH"]
+    found = {}
     for pattern in (
-        "/usr/lib/x86_64-linux-gnu/libLLVM.so.19*",
-        "/usr/lib/x86_64-linux-gnu/libLLVM-19.so*",
-        "/usr/lib/llvm-19/lib/libLLVM*.so*",
         "/usr/lib/x86_64-linux-gnu/libLLVM*.so*",
+        "/usr/lib/llvm-*/lib/libLLVM*.so*",
     ):
-        hits = sorted(glob.glob(pattern))
-        if hits:
-            return hits[0]
-    return None
+        for path in glob.glob(pattern):
+            m = re.search(r"libLLVM[-.](?:so\.)?(\d+)", os.path.basename(path))
+            if m and int(m.group(1)) >= 16:
+                found.setdefault(int(m.group(1)), path)
+    return found[max(found)] if found else None
 
 
 def _inputs(n: int, seed: int):
@@ -153,7 +172,17 @@ def main(argv=None) -> int:
     p.add_argument("--batch", type=int, default=1_000_000, help="directions per batch")
     p.add_argument("--repeats", type=int, default=3)
     p.add_argument("--cases", nargs="*", default=CASES, choices=CASES)
+    p.add_argument(
+        "--tuned-malloc",
+        action="store_true",
+        help="re-run with glibc's allocator keeping freed memory (see the module docstring)",
+    )
     args = p.parse_args(argv)
+    if args.tuned_malloc and any(os.environ.get(k) != v for k, v in _MALLOC_ENV.items()):
+        # The allocator reads these at start-up only: re-run this script with them set.
+        os.environ.update(_MALLOC_ENV)
+        rest = sys.argv[1:] if argv is None else list(argv)
+        os.execv(sys.executable, [sys.executable, os.path.abspath(__file__), *rest])
 
     n_batches = max(1, args.n // args.batch)
     n = n_batches * args.batch
@@ -177,7 +206,8 @@ def main(argv=None) -> int:
     print(
         f"# radiometria.scattering vs Mitsuba 3 ({variant}); jax {jax.__version__} on {platform},"
         f" float32; {n:.0e} directions in batches of {args.batch:.0e}; best of {args.repeats};"
-        f" libLLVM: {os.environ.get('DRJIT_LIBLLVM_PATH')}"
+        f" libLLVM: {os.environ.get('DRJIT_LIBLLVM_PATH')};"
+        f" tuned malloc: {all(os.environ.get(k) == v for k, v in _MALLOC_ENV.items())}"
     )
     print(f"{'bxdf':<16} {'ours [M/s]':>11} {'mitsuba [M/s]':>14} {'ours/mitsuba':>13}")
     for case in args.cases:

@@ -57,9 +57,14 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
-from ._directions import _safe_sqrt
-from ._fresnel import _amplitudes, _check_eta, _check_k, _fr_conductor, _fr_dielectric
-from ._microfacet import TrowbridgeReitzDistribution
+from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
+from ._fresnel import _check_eta, _check_k, _fr_conductor, _fr_dielectric_snell
+from ._microfacet import (
+    TrowbridgeReitzDistribution,
+    _D_den,
+    _sample_wm_xyz,
+    _slope_root,
+)
 from ._warps import _sample_disk_concentric
 
 __all__ = [
@@ -131,21 +136,10 @@ def _safe_div(a: Array, b: Array) -> Array:
     return jnp.where(ok, a / jnp.where(ok, b, 1.0), 0.0)
 
 
-def _unit_safe(v: Array) -> tuple[Array, Array]:
-    """(v / |v|, |v| > 0) along the last axis; a zero vector stays zero (finite gradients).
-
-    The norm is a reduction over the stacked vector, which on XLA's CPU backend ends a fusion,
-    so the producer of `v` is not recomputed for every component of the result.
-    """
-    n2 = jnp.sum(v * v, axis=-1, keepdims=True)
-    ok = n2 > 0
-    return jnp.where(ok, v / jnp.sqrt(jnp.where(ok, n2, 1.0)), 0.0), ok[..., 0]
-
-
 def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array]:
     """Malley's method on the concentric disk mapping (pbrt-v4 A.5.3); returns x, y, z >= 0."""
     x, y = _sample_disk_concentric(u0, u1)
-    z = _safe_sqrt(1.0 - x * x - y * y)
+    z = _sqrt_clamped(1.0 - x * x - y * y)
     return x, y, z
 
 
@@ -201,12 +195,12 @@ class BSDFSample(eqx.Module):
         return _safe_div(self.f * jnp.abs(self.wi[..., 2:3]), self.pdf[..., None])
 
 
-def _failed_or(ok: Array, s: BSDFSample) -> BSDFSample:
-    """Zero f and pdf where `ok` is False."""
+def _failed_or(ok: Array, s: BSDFSample, *, masked: bool = False) -> BSDFSample:
+    """Zero f and pdf where `ok` is False (`masked`: they already are, leave them)."""
     return BSDFSample(
-        f=jnp.where(ok[..., None], s.f, 0.0),
+        f=s.f if masked else jnp.where(ok[..., None], s.f, 0.0),
         wi=s.wi,
-        pdf=jnp.where(ok, s.pdf, 0.0),
+        pdf=s.pdf if masked else jnp.where(ok, s.pdf, 0.0),
         is_delta=s.is_delta,
         is_transmission=s.is_transmission & ok,
         eta=jnp.where(ok, s.eta, 1.0),
@@ -279,12 +273,10 @@ class DiffuseBxDF(AbstractBxDF):
         x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
         # Sample in wo's hemisphere.
         z = jnp.where(wo[..., 2] < 0, -z, z)
-        wi = jnp.stack([x, y, z], axis=-1)
-        z = wi[..., 2]
         ok = (wo[..., 2] != 0) & (z != 0)
         s = BSDFSample(
             f=jnp.broadcast_to(r * (1.0 / jnp.pi), r.shape),
-            wi=wi,
+            wi=_stack3(x, y, z),
             pdf=jnp.abs(z) * (1.0 / jnp.pi),
             is_delta=jnp.zeros(z.shape, bool),
             is_transmission=jnp.zeros(z.shape, bool),
@@ -333,7 +325,7 @@ class OrenNayarBxDF(AbstractBxDF):
     **Fields:**
 
     - `reflectance`: $R$ in [0, 1], `(..., n_lambda)`. [dimensionless]
-    - `sigma`: roughness, `(...)`: slope-angle standard deviation in [0, pi/2] [rad] for
+    - `sigma`: roughness, `(...)`: slope-angle standard deviation [rad] in [0, pi/2] for
         `"qualitative"`, dimensionless in [0, 1] for `"fujii"`.
     - `model`: `"qualitative"` or `"fujii"`.
 
@@ -393,7 +385,7 @@ class OrenNayarBxDF(AbstractBxDF):
         )
         x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
         z = jnp.where(wo[..., 2] < 0, -z, z)
-        wi = jnp.stack([x, y, z], axis=-1)
+        wi = _stack3(x, y, z)
         z = wi[..., 2]
         ok = (wo[..., 2] != 0) & (z != 0)
         s = BSDFSample(
@@ -553,37 +545,40 @@ class DielectricBxDF(AbstractBxDF):
         (wo,) = _dirs(("wo", wo))
         u_lobe = as_float_array(u_lobe, "u_lobe")
         u2 = _u2(u2)
-        _, (wo, u_lobe, _v, eta) = _broadcast((wo, 1), (u_lobe, 0), (u2, 1), (self.eta, 1))
-        cos_o = wo[..., 2]
+        # 1 / eta once per material, before broadcasting over the batch.
+        _, (wo, u_lobe, _v, eta, inv_eta) = _broadcast(
+            (wo, 1), (u_lobe, 0), (u2, 1), (self.eta, 1), (1.0 / self.eta, 1)
+        )
+        ox, oy, oz = _xyz(wo)
         # The hero wavelength (index 0) chooses the lobe and the refracted direction.
-        eta_h = eta[..., 0]
-        r_s, r_p, _, _, etap_h = _amplitudes(cos_o, eta_h)
-        R_h = 0.5 * (r_s * r_s + r_p * r_p)
+        R_h, _, etap_h, inv_etap_h, cos_t, _ = _fr_dielectric_snell(
+            oz, eta[..., 0], inv_eta[..., 0]
+        )
         reflect = u_lobe < R_h
-        # Reflection about +z (thesis eq. 3.8).
-        wr = _mirror_xy(wo)
-        # Refraction (thesis eq. 3.12) through +z with the hero's relative index.
-        sin2_t = (1.0 - cos_o * cos_o) / (etap_h * etap_h)
-        cos_t = _safe_sqrt(1.0 - sin2_t)
-        cos_t = jnp.where(cos_o < 0, cos_t, -cos_t)  # opposite side of wo
-        wt = jnp.stack([-wo[..., 0] / etap_h, -wo[..., 1] / etap_h, cos_t], axis=-1)
-        wi = jnp.where(reflect[..., None], wr, wt)
-        c = jnp.abs(wi[..., 2])
+        # Reflection about +z (thesis eq. 3.8): (-x, -y, z). Refraction (thesis eq. 3.12)
+        # through +z with the hero's relative index: (-x / eta', -y / eta', -+cos_t), on the
+        # opposite side of wo.
+        scale = jnp.where(reflect, 1.0, inv_etap_h)
+        iz = jnp.where(reflect, oz, jnp.where(oz < 0, cos_t, -cos_t))
+        wi = _stack3(-ox * scale, -oy * scale, iz)
+        c = jnp.abs(iz)
         if self.dispersion:
             # Every wavelength's own Fresnel term; secondaries end at a transmission.
-            r_s, r_p, _, _, etap = _amplitudes(cos_o[..., None], eta)
-            R = 0.5 * (r_s * r_s + r_p * r_p)
+            R, _, _, inv_etap, _, _ = _fr_dielectric_snell(oz[..., None], eta, inv_eta)
             disp = _dispersive(eta)
         else:
-            R, etap = R_h[..., None], etap_h[..., None]
+            R, inv_etap = R_h[..., None], inv_etap_h[..., None]
             disp = jnp.zeros(c.shape, bool)
         T = 1.0 - R
-        ft = T if mode == "importance" else T / (etap * etap)
+        ft = T if mode == "importance" else T * (inv_etap * inv_etap)
         ft = jnp.where(disp[..., None], _hero_only(ft), ft)
-        f = _safe_div(jnp.where(reflect[..., None], R, ft), c[..., None])
-        f = jnp.broadcast_to(f, eta.shape)
         pdf = jnp.where(reflect, R_h, 1.0 - R_h)
         ok = (c > 0) & (pdf > 0)
+        pdf = jnp.where(ok, pdf, 0.0)
+        # 1/|cos theta_i|, and 0 (= 1/inf) for a failed sample.
+        inv_c = 1.0 / jnp.where(ok, c, jnp.inf)
+        f = jnp.where(reflect[..., None], R, ft) * inv_c[..., None]
+        f = jnp.broadcast_to(f, eta.shape)
         s = BSDFSample(
             f=f,
             wi=wi,
@@ -593,7 +588,7 @@ class DielectricBxDF(AbstractBxDF):
             eta=jnp.where(reflect, 1.0, etap_h),
             terminate_secondary=~reflect & disp,
         )
-        return _failed_or(ok, s)
+        return _failed_or(ok, s, masked=True)
 
 
 # --------------------------------------------------------------------------------------------
@@ -650,32 +645,58 @@ class RoughConductorBxDF(AbstractBxDF):
         d = self.distribution
         return _broadcast(*items, (d.alpha_x, 0), (d.alpha_y, 0), (self.eta, 1), (self.k, 1))
 
-    def _eval(self, wo, wi, d) -> tuple[Array, Array, Array]:
-        """Per-sample parts shared by f and pdf: (D G / (4 |cos cos|), |wo . wh|, pdf)."""
-        zo, zi = wo[..., 2], wi[..., 2]
-        wh, nonzero = _unit_safe(wo + wi)
-        # Face the half vector forward (+z): sample_wm only produces m_z > 0 (D is even).
-        wh = jnp.where(wh[..., 2:3] < 0, -wh, wh)
-        dot = jnp.abs(jnp.sum(wo * wh, axis=-1))
-        ok = (zo * zi > 0) & nonzero
-        v = jnp.where(ok, _safe_div(d.D(wh) * self._G(d, wo, wi), 4.0 * jnp.abs(zo * zi)), 0.0)
-        p = jnp.where(ok, _safe_div(d.D_visible(wo, wh), 4.0 * dot), 0.0)
-        return v, dot, p
+    def _eval(self, o, i, m, ax, ay, ok, dot) -> tuple[Array, Array]:
+        r"""(D G / (4 |cos cos|), pdf) for the microfacet normal `m` (unit, facing +z), zero where
+        not `ok`; `dot` = |wo . wm| > 0 is needed for the pdf. Vectors as (x, y, z).
 
-    def _G(self, d, wo: Array, wi: Array) -> Array:
-        return d.G(wo, wi) if self.masking == "height_correlated" else d.G_separable(wo, wi)
+        With $G_1(\omega) = 2|z|/(|z| + r)$ (`TrowbridgeReitzDistribution.G1`) the cosines
+        cancel: $DG_1G_1/(4|z_oz_i|) = 1/(D^{-1}(|z_o| + r_o)(|z_i| + r_i))$ (separable),
+        $DG/(4|z_oz_i|) = 1/(2D^{-1}(|z_i|r_o + |z_o|r_i))$ (height-correlated), and
+        $D_{\omega_o}(\omega_m)/(4|\omega_o\cdot\omega_m|) = 1/(2D^{-1}(|z_o| + r_o))$.
+        """
+        (ox, oy, oz), (ix, iy, iz), (mx, my, mz) = o, i, m
+        aoz, aiz = jnp.abs(oz), jnp.abs(iz)
+        ro, ri = _slope_root(ox, oy, oz, ax, ay), _slope_root(ix, iy, iz, ax, ay)
+        go = aoz + ro
+        d_inv = _D_den(mx, my, mz, ax, ay)
+        ok_p = ok & (dot > 0)
+        # Each result ends in its division (0 = 1/inf where masked), so XLA's CPU backend
+        # computes it once instead of in every wavelength of the consumer.
+        if self.masking == "height_correlated":
+            v = 0.5 / jnp.where(ok, d_inv * (aiz * ro + aoz * ri), jnp.inf)
+            p = 0.5 / jnp.where(ok_p, d_inv * go, jnp.inf)
+        else:
+            gi = aiz + ri
+            v = 1.0 / jnp.where(ok, d_inv * go * gi, jnp.inf)
+            p = jnp.where(ok_p, 0.5 * v * gi, 0.0)
+        return v, p
+
+    def _half(self, wo, wi, ax, ay):
+        """(D G / (4 |cos cos|), |wo . wm|, pdf) at the half vector of `wo` and `wi` (zero where
+        wi = -wo or the two lie on opposite sides)."""
+        o, i = _xyz(wo), _xyz(wi)
+        hx, hy, hz = o[0] + i[0], o[1] + i[1], o[2] + i[2]
+        n2 = hx * hx + hy * hy + hz * hz
+        nonzero = n2 > 0
+        norm = jnp.sqrt(jnp.where(nonzero, n2, 1.0))
+        # Face the half vector forward (+z): sample_wm only produces m_z > 0 (D is even).
+        inv = jnp.where(hz < 0, -1.0, 1.0) / norm
+        dot = jnp.abs(o[0] * hx + o[1] * hy + o[2] * hz) / norm
+        ok = (o[2] * i[2] > 0) & nonzero
+        v, p = self._eval(o, i, (hx * inv, hy * inv, hz * inv), ax, ay, ok, dot)
+        return v, dot, p
 
     def f(self, wo, wi, *, mode: str = "radiance") -> Array:
         _check_mode(mode)
         wo, wi = _dirs(("wo", wo), ("wi", wi))
         _, (wo, wi, ax, ay, eta, k) = self._bcast_all((wo, 1), (wi, 1))
-        v, dot, _ = self._eval(wo, wi, _distribution(ax, ay))
+        v, dot, _ = self._half(wo, wi, ax, ay)
         return v[..., None] * _fr_conductor(dot[..., None], eta, k)
 
     def pdf(self, wo, wi) -> Array:
         wo, wi = _dirs(("wo", wo), ("wi", wi))
         _, (wo, wi, ax, ay, _e, _k) = self._bcast_all((wo, 1), (wi, 1))
-        return self._eval(wo, wi, _distribution(ax, ay))[2]
+        return self._half(wo, wi, ax, ay)[2]
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
         _check_mode(mode)
@@ -683,22 +704,24 @@ class RoughConductorBxDF(AbstractBxDF):
         u_lobe = as_float_array(u_lobe, "u_lobe")
         u2 = _u2(u2)
         _, (wo, _u, u2, ax, ay, eta, k) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
-        d = _distribution(ax, ay)
-        wm = d.sample_wm(wo, u2)
-        # wi = reflect(wo, wm)   (thesis eq. 3.8)
-        wi = 2.0 * jnp.sum(wo * wm, axis=-1, keepdims=True) * wm - wo
-        ok = wo[..., 2] * wi[..., 2] > 0
-        v, dot, pdf = self._eval(wo, wi, d)
+        o = ox, oy, oz = _xyz(wo)
+        m = mx, my, mz = _sample_wm_xyz(ox, oy, oz, ax, ay, u2[..., 0], u2[..., 1])
+        # wi = reflect(wo, wm)   (thesis eq. 3.8); wm is the half vector of wo and wi.
+        c = ox * mx + oy * my + oz * mz
+        i = 2.0 * c * mx - ox, 2.0 * c * my - oy, 2.0 * c * mz - oz
+        dot = jnp.abs(c)
+        ok = (oz * i[2] > 0) & (dot > 0)
+        v, pdf = self._eval(o, i, m, ax, ay, ok, dot)
         s = BSDFSample(
             f=v[..., None] * _fr_conductor(dot[..., None], eta, k),
-            wi=wi,
+            wi=_stack3(*i),
             pdf=pdf,
             is_delta=jnp.zeros(ok.shape, bool),
             is_transmission=jnp.zeros(ok.shape, bool),
-            eta=jnp.ones(ok.shape, wi.dtype),
+            eta=jnp.ones(ok.shape, wo.dtype),
             terminate_secondary=jnp.zeros(ok.shape, bool),
         )
-        return _failed_or(ok, s)
+        return _failed_or(ok, s, masked=True)
 
 
 # --------------------------------------------------------------------------------------------
@@ -754,121 +777,133 @@ class RoughDielectricBxDF(AbstractBxDF):
         self.masking = _check_masking(masking)
         self.dispersion = _detect_dispersion(self.eta, dispersion)
 
-    def _G(self, d, wo: Array, wi: Array) -> Array:
-        return d.G(wo, wi) if self.masking == "height_correlated" else d.G_separable(wo, wi)
-
     def _bcast_all(self, *items):
         d = self.distribution
-        return _broadcast(*items, (d.alpha_x, 0), (d.alpha_y, 0), (self.eta, 1))
+        # 1 / eta once per material, before broadcasting over the batch.
+        return _broadcast(
+            *items, (d.alpha_x, 0), (d.alpha_y, 0), (self.eta, 1), (1.0 / self.eta, 1)
+        )
 
-    def _eval(self, wo, wi, d, eta, mode, *, with_pdf: bool):
-        """f (and the pdf) for one eta per sample: shapes of `eta` `(...)`.
+    def _eval(self, o, i, ax, ay, eta, inv_eta, mode, m=None, mask=True) -> tuple[Array, Array]:
+        """(f, pdf) for one eta per sample: `eta` and `inv_eta = 1 / eta` of shape `(...)`,
+        vectors as (x, y, z).
 
         The generalised half vector $\\omega_m \\propto \\eta'\\omega_i + \\omega_o$ faces +z;
-        back-facing microfacets are discarded (`Walter2007`, `Pharr2023` 9.7).
+        back-facing microfacets are discarded (`Walter2007`, `Pharr2023` 9.7). `m`, when given,
+        is that half vector (known in `sample_f`); f and pdf are zero where `mask` is False.
+        With $G_1(\\omega) = 2|z|/(|z| + r)$ the cosines cancel: $DG/|z_oz_i| = g/D^{-1}$ with
+        $g = 4/((|z_o| + r_o)(|z_i| + r_i))$ (separable) or $2/(|z_i|r_o + |z_o|r_i)$
+        (height-correlated), and
+        $D_{\\omega_o}(\\omega_m) = 2|\\omega_o\\cdot\\omega_m|/((|z_o| + r_o)D^{-1})$. With
+        $S = \\eta'\\,\\omega_i\\cdot\\omega_m + \\omega_o\\cdot\\omega_m$ ($\\eta'$ times the
+        denominator of the class formula) the transmission terms read
+        $f_t = (1 - F)\\,g\\,|\\omega_i\\cdot\\omega_m\\,\\omega_o\\cdot\\omega_m|/(D^{-1}S^2)$ and
+        $p_t = 2(1 - F)|\\omega_i\\cdot\\omega_m\\,\\omega_o\\cdot\\omega_m|\\,\\eta'^2 /
+        ((|z_o| + r_o)D^{-1}S^2)$, so f and pdf of both lobes share one denominator.
         """
-        zo, zi = wo[..., 2], wi[..., 2]
-        reflect = zo * zi > 0
-        etap = jnp.where(reflect, 1.0, jnp.where(zo > 0, eta, 1.0 / eta))
-        wm, nonzero = _unit_safe(wi * etap[..., None] + wo)
-        wm = jnp.where(wm[..., 2:3] < 0, -wm, wm)
-        dot_o = jnp.sum(wo * wm, axis=-1)
-        dot_i = jnp.sum(wi * wm, axis=-1)
-        valid = (zo != 0) & (zi != 0) & nonzero & (dot_i * zi > 0) & (dot_o * zo > 0)
-        F = _fr_dielectric(dot_o, eta)
-        D = d.D(wm)
-        G = self._G(d, wo, wi)
-        fr = _safe_div(D * G * F, 4.0 * jnp.abs(zo * zi))
-        den = dot_i + dot_o / etap
-        ft = (1.0 - F) * D * G * jnp.abs(_safe_div(dot_i * dot_o, den * den * zi * zo))
-        if mode == "radiance":
-            ft = ft / (etap * etap)
-        f = jnp.where(valid, jnp.where(reflect, fr, ft), 0.0)
-        if not with_pdf:
-            return f, None
-        dvis = d.D_visible(wo, wm)
-        pr = _safe_div(dvis, 4.0 * jnp.abs(dot_o)) * F
-        pt = dvis * _safe_div(jnp.abs(dot_i), den * den) * (1.0 - F)
-        return f, jnp.where(valid, jnp.where(reflect, pr, pt), 0.0)
+        (ox, oy, oz), (ix, iy, iz) = o, i
+        reflect = oz * iz > 0
+        etap = jnp.where(reflect, 1.0, jnp.where(oz > 0, eta, inv_eta))
+        if m is None:
+            hx, hy, hz = ix * etap + ox, iy * etap + oy, iz * etap + oz
+            inv, nonzero = _inv_norm(hx, hy, hz)
+            inv = jnp.where(hz < 0, -inv, inv)
+            mx, my, mz = hx * inv, hy * inv, hz * inv
+        else:
+            (mx, my, mz), nonzero = m, True
+        dot_o = ox * mx + oy * my + oz * mz
+        dot_i = ix * mx + iy * my + iz * mz
+        valid = (oz != 0) & (iz != 0) & nonzero & (dot_i * iz > 0) & (dot_o * oz > 0)
+        F = _fr_dielectric_snell(dot_o, eta, inv_eta)[0]
+        aoz, aiz = jnp.abs(oz), jnp.abs(iz)
+        ro, ri = _slope_root(ox, oy, oz, ax, ay), _slope_root(ix, iy, iz, ax, ay)
+        go = aoz + ro
+        if self.masking == "height_correlated":
+            gn, gd = 2.0, aiz * ro + aoz * ri
+        else:
+            gn, gd = 4.0, go * (aiz + ri)
+        s = etap * dot_i + dot_o
+        den = _D_den(mx, my, mz, ax, ay) * gd * go * jnp.where(reflect, 1.0, s * s)
+        # Masked as 1/inf = 0, so that f and pdf end in their division: XLA's CPU backend then
+        # computes them once instead of in every consumer (every wavelength of f).
+        den = jnp.where(valid & mask & (den > 0), den, jnp.inf)
+        etap2 = etap * etap
+        t = (1.0 - F) * jnp.abs(dot_i * dot_o)
+        t_f = t * etap2 if mode == "importance" else t  # the 1/eta'^2 radiance factor
+        f = (go * gn) * jnp.where(reflect, 0.25 * F, t_f) / den
+        pdf = gd * jnp.where(reflect, 0.5 * F, 2.0 * t * etap2) / den
+        return f, pdf
 
-    def _spectral_f(self, wo, wi, d, eta, mode) -> Array:
+    def _spectral_f(self, o, i, ax, ay, eta, inv_eta, mode) -> Array:
         """Per-wavelength f `(..., n_lambda)`: the geometry is recomputed for every wavelength's
         eta when `dispersion`, else computed once with `eta[..., 0]` and broadcast."""
         if not self.dispersion:
-            f, _ = self._eval(wo, wi, d, eta[..., 0], mode, with_pdf=False)
+            f, _ = self._eval(o, i, ax, ay, eta[..., 0], inv_eta[..., 0], mode)
             return jnp.broadcast_to(f[..., None], eta.shape)
-        d_l = _distribution(d.alpha_x[..., None], d.alpha_y[..., None])
-        wo_l = wo[..., None, :]
-        wi_l = wi[..., None, :]
-        f, _ = self._eval(wo_l, wi_l, d_l, eta, mode, with_pdf=False)
+        o_l = tuple(c[..., None] for c in o)
+        i_l = tuple(c[..., None] for c in i)
+        f, _ = self._eval(o_l, i_l, ax[..., None], ay[..., None], eta, inv_eta, mode)
         return f
 
     def f(self, wo, wi, *, mode: str = "radiance") -> Array:
         _check_mode(mode)
         wo, wi = _dirs(("wo", wo), ("wi", wi))
-        _, (wo, wi, ax, ay, eta) = self._bcast_all((wo, 1), (wi, 1))
-        return self._spectral_f(wo, wi, _distribution(ax, ay), eta, mode)
+        _, (wo, wi, ax, ay, eta, inv_eta) = self._bcast_all((wo, 1), (wi, 1))
+        return self._spectral_f(_xyz(wo), _xyz(wi), ax, ay, eta, inv_eta, mode)
 
     def pdf(self, wo, wi) -> Array:
         wo, wi = _dirs(("wo", wo), ("wi", wi))
-        _, (wo, wi, ax, ay, eta) = self._bcast_all((wo, 1), (wi, 1))
-        return self._eval(wo, wi, _distribution(ax, ay), eta[..., 0], "radiance", with_pdf=True)[1]
+        _, (wo, wi, ax, ay, eta, inv_eta) = self._bcast_all((wo, 1), (wi, 1))
+        o, i = _xyz(wo), _xyz(wi)
+        return self._eval(o, i, ax, ay, eta[..., 0], inv_eta[..., 0], "radiance")[1]
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
         _check_mode(mode)
         (wo,) = _dirs(("wo", wo))
         u_lobe = as_float_array(u_lobe, "u_lobe")
         u2 = _u2(u2)
-        _, (wo, u_lobe, u2, ax, ay, eta) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
-        d = _distribution(ax, ay)
-        eta_h = eta[..., 0]
-        wm = d.sample_wm(wo, u2)
-        dot_o = jnp.sum(wo * wm, axis=-1)
-        R = _fr_dielectric(dot_o, eta_h)
+        _, (wo, u_lobe, u2, ax, ay, eta, inv_eta) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
+        eta_h, inv_eta_h = eta[..., 0], inv_eta[..., 0]
+        o = ox, oy, oz = _xyz(wo)
+        m = mx, my, mz = _sample_wm_xyz(ox, oy, oz, ax, ay, u2[..., 0], u2[..., 1])
+        dot_o = ox * mx + oy * my + oz * mz
+        # Fresnel and Snell's law at the microfacet with the hero's eta; the interface flips
+        # when wo is on the back of the microfacet (etap = 1 / eta there).
+        R, c, _, inv_etap, cos_t, tir = _fr_dielectric_snell(dot_o, eta_h, inv_eta_h)
         reflect = u_lobe < R
         # Reflection about wm (thesis eq. 3.8).
-        wr = 2.0 * dot_o[..., None] * wm - wo
-        # Refraction through wm (thesis eq. 3.12) with the hero's eta; the interface flips
-        # when wo is on the back of the microfacet.
-        inside = dot_o < 0
-        etap = jnp.where(inside, 1.0 / eta_h, eta_h)
-        c = jnp.abs(dot_o)
-        sin2_t = (1.0 - c * c) / (etap * etap)
-        tir = sin2_t >= 1.0
-        cos_t = _safe_sqrt(jnp.where(tir, 0.0, 1.0 - sin2_t))
-        nm = jnp.where(inside[..., None], -wm, wm)
-        wt = -wo / etap[..., None] + (c / etap - cos_t)[..., None] * nm
-        wi = jnp.where(reflect[..., None], wr, wt)
-        same = wo[..., 2] * wi[..., 2] > 0
-        ok = jnp.where(reflect, same, ~tir & ~same & (wi[..., 2] != 0))
-        f_h, pdf = self._eval(wo, wi, d, eta_h, mode, with_pdf=True)
+        c2 = 2.0 * dot_o
+        # Refraction through wm (thesis eq. 3.12), with the normal nm = +-wm facing wo:
+        # wt = -wo / eta' + (cos_i / eta' - cos_t) nm.
+        b = jnp.where(dot_o < 0, cos_t - c * inv_etap, c * inv_etap - cos_t)
+        a = jnp.where(reflect, c2, b)
+        ov = jnp.where(reflect, 1.0, inv_etap)
+        i = a * mx - ov * ox, a * my - ov * oy, a * mz - ov * oz
+        iz = i[2]
+        same = oz * iz > 0
+        ok = jnp.where(reflect, same, ~tir & ~same & (iz != 0))
+        f_h, pdf = self._eval(o, i, ax, ay, eta_h, inv_eta_h, mode, m=m, mask=ok)
         if self.dispersion:
-            f = self._spectral_f(wo, wi, d, eta, mode)
+            f = self._spectral_f(o, i, ax, ay, eta, inv_eta, mode)
             term = ~reflect & _dispersive(eta)
             f = jnp.where(term[..., None], _hero_only(f), f)
         else:
             f = jnp.broadcast_to(f_h[..., None], eta.shape)
             term = jnp.zeros(ok.shape, bool)
-        ok = ok & (pdf > 0)
-        etap_s = jnp.where(wo[..., 2] > 0, eta_h, 1.0 / eta_h)
+        ok = pdf > 0
+        # f_h and the pdf are zero where the sample failed; the per-wavelength f is not.
+        f = jnp.where(ok[..., None], f, 0.0) if self.dispersion else f
+        etap_s = jnp.where(oz > 0, eta_h, inv_eta_h)
         s = BSDFSample(
             f=f,
-            wi=wi,
+            wi=_stack3(*i),
             pdf=pdf,
             is_delta=jnp.zeros(ok.shape, bool),
             is_transmission=~reflect,
             eta=jnp.where(reflect, 1.0, etap_s),
             terminate_secondary=term,
         )
-        return _failed_or(ok, s)
-
-
-def _distribution(ax: Array, ay: Array) -> TrowbridgeReitzDistribution:
-    """A distribution from already-validated alphas (no checks: used inside the methods)."""
-    d = TrowbridgeReitzDistribution.__new__(TrowbridgeReitzDistribution)
-    object.__setattr__(d, "alpha_x", ax)
-    object.__setattr__(d, "alpha_y", ay)
-    return d
+        return _failed_or(ok, s, masked=True)
 
 
 # --------------------------------------------------------------------------------------------

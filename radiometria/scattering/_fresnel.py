@@ -20,7 +20,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from .._checks import as_float_array, check_broadcastable, check_positive
-from ._directions import _align, _bcast, _safe_sqrt
+from ._directions import _align, _bcast, _safe_sqrt, _sqrt_clamped
 
 __all__ = [
     "fresnel_complex",
@@ -85,6 +85,37 @@ def _fr_dielectric(cos_i: Array, eta: Array) -> Array:
     """Unchecked unpolarised dielectric reflectance (equal-rank inputs)."""
     r_s, r_p, _, _, _ = _amplitudes(cos_i, eta)
     return 0.5 * (r_s * r_s + r_p * r_p)
+
+
+def _fr_dielectric_snell(cos_i: Array, eta: Array, inv_eta: Array):
+    r"""Unpolarised reflectance and Snell's law for the BxDFs' inner loop (unchecked).
+
+    `inv_eta` is `1 / eta`, computed once per material by the caller. Returns
+    `(F, |cos_i|, eta_eff, inv_eta_eff, cos_t, tir)`, where `eta_eff` is the relative index seen
+    from the side of `cos_i` (`eta`, or `1 / eta` from inside) and `cos_t >= 0` (0 under total
+    internal reflection). Same values as `_amplitudes` up to rounding, with one square root and
+    one division: $F = \tfrac12(n_\perp^2 d_\parallel^2 + n_\parallel^2 d_\perp^2) /
+    (d_\perp d_\parallel)^2$ for $r = n/d$.
+    """
+    cos_i = jnp.clip(cos_i, -1.0, 1.0)
+    # A ray arriving from inside the object sees the inverse relative index.
+    inside = cos_i < 0
+    eta, inv_eta = jnp.where(inside, inv_eta, eta), jnp.where(inside, eta, inv_eta)
+    cos_i = jnp.abs(cos_i)
+    # Snell's law: sin^2(theta_t) = sin^2(theta_i) / eta^2   (thesis eq. 3.7, 3.10)
+    sin2_t = (1.0 - cos_i * cos_i) * (inv_eta * inv_eta)
+    tir = sin2_t >= 1.0
+    cos_t = _sqrt_clamped(1.0 - sin2_t)
+    n_s, d_s = cos_i - eta * cos_t, cos_i + eta * cos_t
+    n_p, d_p = eta * cos_i - cos_t, eta * cos_i + cos_t
+    d_s2, d_p2 = d_s * d_s, d_p * d_p
+    den = d_s2 * d_p2
+    # The denominators vanish only at grazing incidence under TIR (masked: F = 1); an
+    # index-matched interface (eta = 1) has no interface at all, even at grazing incidence.
+    ok = ~tir & (den > 0)
+    f = 0.5 * (n_s * n_s * d_p2 + n_p * n_p * d_s2) / jnp.where(ok, den, 1.0)
+    f = jnp.where(eta == 1.0, 0.0, jnp.where(ok, f, 1.0))
+    return f, cos_i, eta, inv_eta, cos_t, tir
 
 
 def _inputs(cos_theta_i, eta) -> tuple[Array, Array]:
@@ -269,38 +300,57 @@ def fresnel_conductor_polarized(cos_theta_i, eta, k) -> tuple[Array, Array]:
     return _fr_conductor_polarized(*_align(mu, eta, k))
 
 
-def _fr_conductor_polarized(mu: Array, eta: Array, k: Array) -> tuple[Array, Array]:
-    """Unchecked core of `fresnel_conductor_polarized` (equal-rank inputs)."""
-    mu = jnp.abs(jnp.clip(mu, -1.0, 1.0))
+def _conductor_terms(mu: Array, eta: Array, k: Array):
+    r"""Numerators and denominators of the s and p parts (`fresnel_conductor_polarized`).
+
+    Returns (num_s, den_s, num_p, den_p) with $R_s$ = num_s/den_s and
+    $R_p = R_s\cdot$ num_p/den_p. Two square roots and one division.
+    """
+    mu = jnp.minimum(jnp.abs(mu), 1.0)
     mu2 = mu * mu
     sin2 = 1.0 - mu2
     c = eta * eta - k * k - sin2
     ek = eta * k
-    s = _safe_sqrt(c * c + 4.0 * ek * ek)  # = a^2 + b^2
-    # a^2 = (s + c)/2 and b^2 = (s - c)/2; take the one without cancellation and get the other
-    # from a b = eta k.
+    s = _sqrt_clamped(c * c + 4.0 * ek * ek)  # = a^2 + b^2
+    # a^2 = (s + c)/2 and b^2 = (s - c)/2; take the one without cancellation, q, and get the
+    # other from a b = eta k: a^2 b^2 = (eta k)^2.
     pos = c >= 0
-    big = _safe_sqrt(0.5 * (s + jnp.abs(c)))
-    big_ok = big > 0
-    small = jnp.where(big_ok, ek / jnp.where(big_ok, big, 1.0), 0.0)
-    a = jnp.where(pos, big, small)
-    b2 = jnp.where(pos, small * small, big * big)
+    q = 0.5 * (s + jnp.abs(c))
+    q_ok = q > 0
+    sqrt_q = _sqrt_clamped(q)
+    inv_q = jnp.where(q_ok, 1.0 / jnp.where(q_ok, q, 1.0), 0.0)
+    a = jnp.where(pos, sqrt_q, ek * sqrt_q * inv_q)  # sqrt(q) or eta k / sqrt(q)
+    b2 = jnp.where(pos, ek * ek * inv_q, q)
     num_s = (a - mu) ** 2 + b2
     den_s = (a + mu) ** 2 + b2
-    ok_s = den_s > 0
-    r_s = jnp.where(ok_s, num_s / jnp.where(ok_s, den_s, 1.0), 1.0)
     am = a * mu
     num_p = (am - sin2) ** 2 + b2 * mu2
     den_p = (am + sin2) ** 2 + b2 * mu2
+    return num_s, den_s, num_p, den_p
+
+
+def _fr_conductor_polarized(mu: Array, eta: Array, k: Array) -> tuple[Array, Array]:
+    """Unchecked core of `fresnel_conductor_polarized` (equal-rank inputs)."""
+    num_s, den_s, num_p, den_p = _conductor_terms(mu, eta, k)
+    ok_s = den_s > 0
+    r_s = jnp.where(ok_s, num_s / jnp.where(ok_s, den_s, 1.0), 1.0)
     ok_p = den_p > 0
     r_p = r_s * jnp.where(ok_p, num_p / jnp.where(ok_p, den_p, 1.0), 1.0)
     return r_s, r_p
 
 
 def _fr_conductor(mu: Array, eta: Array, k: Array) -> Array:
-    """Unchecked unpolarised conductor reflectance (equal-rank inputs)."""
-    r_s, r_p = _fr_conductor_polarized(mu, eta, k)
-    return 0.5 * (r_s + r_p)
+    r"""Unchecked unpolarised conductor reflectance (equal-rank inputs).
+
+    $F_r = \tfrac12 R_s(1 + \text{num}_p/\text{den}_p)$ over one common denominator, so a
+    single division (the BxDFs evaluate it per wavelength in the renderer's inner loop).
+    """
+    num_s, den_s, num_p, den_p = _conductor_terms(mu, eta, k)
+    den = den_s * den_p
+    ok = den > 0
+    # The product vanishes only in the limit of grazing incidence (den_s) or of eta, k -> 0 at
+    # normal incidence (den_p), where the reflectance tends to 1.
+    return jnp.where(ok, 0.5 * num_s * (den_p + num_p) / jnp.where(ok, den, 1.0), 1.0)
 
 
 def fresnel_conductor(cos_theta_i, eta, k) -> Array:
