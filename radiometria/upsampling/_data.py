@@ -13,51 +13,28 @@ The file is read on the first `get_lut()` call, not at import (the table is 9.4 
 """
 
 import functools
-import json
 from pathlib import Path
 
 import numpy as np
 
-from ._io import LUTFileError, checksum
+from ._io import encode_planes as encode_planes, load_lut
 from ._lut import RGBToSpectrumLUT, fit_lut
 
 DATA_DIR = Path(__file__).parent / "data"
 SRGB_FILE = DATA_DIR / "srgb_64.npz"
 
 
-def encode_planes(coeffs: np.ndarray) -> np.ndarray:
-    """float32 array -> (4, n) uint8 byte planes (little-endian)."""
-    c = np.ascontiguousarray(coeffs, dtype="<f4").reshape(-1)
-    return np.ascontiguousarray(c.view(np.uint8).reshape(-1, 4).T)
-
-
-def decode_planes(planes: np.ndarray, shape) -> np.ndarray:
-    """Inverse of `encode_planes`."""
-    b = np.ascontiguousarray(np.asarray(planes, np.uint8).T)
-    return b.view("<f4").reshape(shape).astype(np.float32)
-
-
 def read_packaged(path: Path = SRGB_FILE) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(scale, coeffs, metadata) of a packaged table, validated against its sha256."""
-    try:
-        with np.load(path, allow_pickle=False) as f:
-            scale = np.asarray(f["scale"], np.float32)
-            planes = np.asarray(f["coeffs_planes"])
-            meta = json.loads(str(f["metadata"][()]))
-    except (OSError, KeyError, ValueError) as err:
-        raise LUTFileError(f"Packaged table {str(path)!r} is unreadable: {err}") from err
-    res = scale.shape[0]
-    coeffs = decode_planes(planes, (3, res, res, res, 3))
-    if checksum(scale, coeffs) != meta.get("sha256"):
-        raise LUTFileError(f"Packaged table {str(path)!r}: checksum mismatch (corrupt install?).")
-    return scale, coeffs, meta
+    """(scale, coeffs, metadata) of a packaged table, validated as `load_lut` validates files
+    (shapes, finiteness, sha256)."""
+    lut, info = load_lut(path, with_info=True)
+    return np.asarray(lut.scale), np.asarray(lut.coeffs), info["metadata"]
 
 
 @functools.lru_cache(maxsize=8)
 def _get_lut_cached(name: str) -> RGBToSpectrumLUT:
     if name == "sRGB":
-        scale, coeffs, meta = read_packaged()
-        return RGBToSpectrumLUT(scale, coeffs, meta.get("colourspace", "sRGB"))
+        return load_lut(SRGB_FILE)
     return fit_lut(name, 64, throw=False).lut
 
 

@@ -249,17 +249,41 @@ def load_lut(path, *, with_info: bool = False):
     return (lut, info) if with_info else lut
 
 
+def encode_planes(coeffs: np.ndarray) -> np.ndarray:
+    """float32 array -> (4, n) uint8 byte planes (little-endian), the packaged `.npz` layout
+    `coeffs_planes` (byte-shuffled floats compress better under zlib)."""
+    c = np.ascontiguousarray(coeffs, dtype="<f4").reshape(-1)
+    return np.ascontiguousarray(c.view(np.uint8).reshape(-1, 4).T)
+
+
+def decode_planes(planes: np.ndarray, shape) -> np.ndarray:
+    """Inverse of `encode_planes`: (4, n) uint8 byte planes -> float32 array of `shape`."""
+    b = np.ascontiguousarray(np.asarray(planes, np.uint8).T)
+    return b.view("<f4").reshape(shape).astype(np.float32)
+
+
 def _load_npz(path: Path):
     import zipfile
 
     try:
         with np.load(path, allow_pickle=False) as f:
             files = set(f.files)
-            missing = {"scale", "coeffs"} - files
+            # The packaged tables store the float32 coefficients as byte planes (`_data.py`).
+            coeffs_name = "coeffs_planes" if "coeffs_planes" in files else "coeffs"
+            missing = {"scale", coeffs_name} - files
             if missing:
                 _fail(path, f"missing array(s) {sorted(missing)}; found {sorted(files)}.")
             scale = np.asarray(f["scale"])
-            coeffs = np.asarray(f["coeffs"])
+            coeffs = np.asarray(f[coeffs_name])
+            if coeffs_name == "coeffs_planes":
+                res = scale.shape[0] if scale.ndim == 1 else -1
+                if coeffs.dtype != np.uint8 or coeffs.shape != (4, 9 * res**3):
+                    _fail(
+                        path,
+                        f"`coeffs_planes` must be uint8 of shape (4, {9 * res**3}) for res "
+                        f"{res}, got {coeffs.dtype} {coeffs.shape}.",
+                    )
+                coeffs = decode_planes(coeffs, (3, res, res, res, 3))
             meta_raw = str(f["metadata"][()]) if "metadata" in files else None
     except LUTFileError:
         raise

@@ -152,3 +152,22 @@ def test_mitsuba_loads_our_coeff(tmp_path):
     (tmp_path / "data" / "srgb.coeff").write_bytes(data[: 8 + 4 * 64 + 36 * 64**3])
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True)
     assert out.returncode != 0 and "Could not load" in out.stderr
+
+
+def test_packaged_table_reads_with_load_lut_and_rejects_bad_planes(tmp_path):
+    from radiometria.upsampling._data import SRGB_FILE
+
+    lut, info = up.load_lut(SRGB_FILE, with_info=True)
+    assert info["format"] == "npz" and lut.resolution == 64
+    assert info["metadata"]["sha256"]  # the packaged file carries its checksum
+    with np.load(SRGB_FILE) as f:
+        arrays = {k: np.asarray(f[k]) for k in f.files}
+    bad = tmp_path / "planes.npz"
+    np.savez(bad, **{**arrays, "coeffs_planes": arrays["coeffs_planes"][:, :-9]})
+    with pytest.raises(up.LUTFileError, match="coeffs_planes"):
+        up.load_lut(bad)
+    flipped = arrays["coeffs_planes"].copy()
+    flipped[0, 0] ^= 1
+    np.savez(bad, **{**arrays, "coeffs_planes": flipped})
+    with pytest.raises(up.LUTFileError, match="checksum"):
+        up.load_lut(bad)
