@@ -77,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=None,
         metavar="N",
-        help="XLA CPU devices to shard renders over [XLA's default, 1; XLA_FLAGS wins]",
+        help="XLA CPU devices to shard renders over [one per core; XLA_FLAGS wins if it sets it]",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -119,17 +119,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _configure_cpu_devices(count: int | None) -> None:
-    """Give XLA `count` CPU devices, so renders shard over them (`--cpu-devices N`).
+    """Give XLA `count` CPU devices (default: one per core), so renders shard over all cores.
 
-    Sets `--xla_force_host_platform_device_count` in `XLA_FLAGS` unless it is already set there,
-    and does nothing without a count: XLA's single CPU device is the default, because several
-    host devices deadlocked in a cross-device all-reduce during `radiometria demo` (XLA:CPU
-    rendezvous timeout). It takes effect only if JAX has not initialised its backends yet
-    (true when the command starts); accelerators, when present, are used as they are.
+    Sets `--xla_force_host_platform_device_count` in `XLA_FLAGS` unless it is already set there.
+    It takes effect only if JAX has not initialised its backends yet (true when the command
+    starts); accelerators, when present, are used as they are.
     """
     flags = os.environ.get("XLA_FLAGS", "")
-    if count is None or "xla_force_host_platform_device_count" in flags:
+    if "xla_force_host_platform_device_count" in flags:
         return
+    count = count or os.cpu_count() or 1
     os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()
 
 

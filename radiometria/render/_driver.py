@@ -346,10 +346,16 @@ def render(
     n_proc, proc = jax.process_count(), jax.process_index()
     steps = range(proc, plan.n_steps, n_proc)
     bar = _progress_bar(progress, total=n_pixels * spp if n_proc == 1 else None)
+    # Several XLA:CPU host devices: wait for each step before dispatching the next. Queued
+    # multi-device steps can occupy every thread of the small CPU thread pool at a cross-device
+    # rendezvous while the other device's part waits for a thread, which deadlocked on 2 cores.
+    serialise = len(devices) > 1 and devices[0].platform == "cpu"
     for i in steps:
         group, tile = divmod(i, plan.n_tiles)
         pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
         film = step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel)
+        if serialise:
+            film = jax.block_until_ready(film)
         if bar is not None:  # the step's paths: its pixels in the image x its passes below spp
             pixels = min(plan.tile, n_pixels - tile * plan.tile)
             bar.update(pixels * min(plan.passes, spp - group * plan.passes))
