@@ -219,9 +219,12 @@ def test_planck_underflows_to_zero(dtype):
 
 @pytest.mark.parametrize("dtype", [jnp.float32, jnp.float64])
 def test_planck_near_branch_switch_continuous(dtype):
-    # x = 20 is where the direct and the logarithmic forms meet: no jump there.
+    # x_s (37 in float64, 18 in float32) is where the direct and the Wien forms meet: no jump.
+    from radiometria.radiometry._planck import _X_SWITCH_F32, _X_SWITCH_F64
+
+    switch = _X_SWITCH_F64 if dtype == jnp.float64 else _X_SWITCH_F32
     t = jnp.asarray(5000.0, dtype)
-    x = jnp.asarray([19.999, 20.0, 20.001], dtype)
+    x = jnp.asarray([switch - 0.001, switch, switch + 0.001], dtype)
     w = jnp.asarray(c.C2 * 1e9 / 5000.0, dtype) / x
     ref = np.array([_planck_decimal(float(wi), 5000.0) for wi in np.asarray(w, np.float64)])
     np.testing.assert_allclose(
@@ -229,9 +232,9 @@ def test_planck_near_branch_switch_continuous(dtype):
     )
 
 
-@pytest.mark.parametrize("x", [19.5, 20.0, 20.5, 80.0, 800.0])
+@pytest.mark.parametrize("x", [19.5, 36.5, 37.0, 37.5, 80.0, 800.0])
 def test_planck_kernel_gradient_at_branch_switch(x):
-    # d/dx [1 / expm1(x)] = -e^x / expm1(x)^2, exactly also at the switch point x = 20.
+    # d/dx [1 / expm1(x)] = -e^x / expm1(x)^2, exactly also at the float64 switch x = 37.
     from radiometria.radiometry._planck import _prefactor_over_expm1
 
     fn = lambda x: _prefactor_over_expm1(jnp.asarray(1.0), jnp.asarray(0.0), x)
