@@ -139,8 +139,9 @@ def planck(wavelength_nm: FloatLike, temperature: FloatLike) -> Float[Array, "..
     gradients with respect to both arguments. Where the true radiance lies below the smallest
     representable number (deep in the Wien tail, e.g. 1 nm at 1 K), the result is exactly 0
     with gradient 0. The relative error is a few ulp times max(1, x), x = c_2 / (lambda T), which
-    is the conditioning of the formula itself (measured: <= 3 eps max(1, x) in float32 and
-    float64; e.g. 2e-6 at x = 20 in float32, 1e-14 in float64 at x = 100).
+    is the conditioning of the formula itself (measured against 50-digit decimal arithmetic on
+    4000 log-uniform points of the domain: <= 4.2 eps max(1, x) in float32, <= 6 eps max(1, x)
+    in float64).
 
     !!! note "Thesis"
         Thesis eq. (1.24), section 1.5.
