@@ -32,6 +32,7 @@ from jaxtyping import Array, ArrayLike, Bool, Float, Int
 
 from ._bvh import BVH, EMPTY
 from ._mesh import TriangleMesh
+from ._native import native_query, resolve_backend
 
 __all__ = [
     "Hit",
@@ -672,12 +673,17 @@ _REFILL_EVERY = 4
 
 
 @eqx.filter_jit
-def _closest(bvh, o, d, tmin, tmax, lanes=_LANES, refill_every=_REFILL_EVERY):
+def _closest(bvh, o, d, tmin, tmax, backend="jax", lanes=_LANES, refill_every=_REFILL_EVERY):
+    if backend == "native":
+        t, prim, b1, b2 = native_query(bvh, o, d, tmin, tmax, any_hit=False)
+        return Hit(t=t, prim=prim, b1=b1, b2=b2)
     return _traverse(bvh, o, d, tmin, tmax, any_hit=False, lanes=lanes, refill_every=refill_every)
 
 
 @eqx.filter_jit
-def _any(bvh, o, d, tmin, tmax, lanes=_LANES, refill_every=_REFILL_EVERY):
+def _any(bvh, o, d, tmin, tmax, backend="jax", lanes=_LANES, refill_every=_REFILL_EVERY):
+    if backend == "native":
+        return native_query(bvh, o, d, tmin, tmax, any_hit=True)[1] >= 0
     hit = _traverse(bvh, o, d, tmin, tmax, any_hit=True, lanes=lanes, refill_every=refill_every)
     return hit.prim >= 0
 
@@ -706,11 +712,12 @@ def _pad_bvh(bvh: BVH) -> BVH:
     )
 
 
-def _query(fn, bvh: BVH, o, d, tmin, tmax):
+def _query(fn, bvh: BVH, o, d, tmin, tmax, backend: str):
     """Run a traversal; eager calls are padded to size buckets and share compiled programs."""
+    backend = resolve_backend(backend)
     if not _is_concrete(bvh, o, d, tmin, tmax):
-        return fn(bvh, o, d, tmin, tmax)
-    out = fn(_pad_bvh(bvh), *_pad_rays(o, d, tmin, tmax))
+        return fn(bvh, o, d, tmin, tmax, backend)
+    out = fn(_pad_bvh(bvh), *_pad_rays(o, d, tmin, tmax), backend)
     n = o.shape[0]
     return _slice_hit(out, n) if isinstance(out, Hit) else out[:n]
 
@@ -722,6 +729,7 @@ def intersect_closest(
     t_max: ArrayLike = float("inf"),
     *,
     t_min: ArrayLike = 0.0,
+    backend: str = "auto",
 ) -> Hit:
     """Closest hit of each ray, by BVH traversal (near child first, fixed-depth stack).
 
@@ -750,7 +758,7 @@ def intersect_closest(
     if not isinstance(bvh, BVH):
         raise TypeError(f"`bvh` must be a BVH (see build_bvh), got {type(bvh).__name__}.")
     o, d, tmin, tmax = _check_rays(origins, directions, t_max, bvh.triangles.dtype, t_min)
-    return _query(_closest, bvh, o, d, tmin, tmax)
+    return _query(_closest, bvh, o, d, tmin, tmax, backend)
 
 
 def intersect_any(
@@ -760,6 +768,7 @@ def intersect_any(
     t_max: ArrayLike = float("inf"),
     *,
     t_min: ArrayLike = 0.0,
+    backend: str = "auto",
 ) -> Bool[Array, " n"]:
     """Whether each ray segment `t_min < t < t_max` is occluded (any-hit, early exit per ray).
 
@@ -782,4 +791,4 @@ def intersect_any(
     if not isinstance(bvh, BVH):
         raise TypeError(f"`bvh` must be a BVH (see build_bvh), got {type(bvh).__name__}.")
     o, d, tmin, tmax = _check_rays(origins, directions, t_max, bvh.triangles.dtype, t_min)
-    return _query(_any, bvh, o, d, tmin, tmax)
+    return _query(_any, bvh, o, d, tmin, tmax, backend)

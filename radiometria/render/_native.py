@@ -1,0 +1,239 @@
+"""Native CPU BVH traversal: a C++ kernel called through XLA's FFI (`jax.ffi`) (thesis ch. 8).
+
+XLA:CPU runs the lockstep JAX traversal (`_intersect._traverse`) as a `while_loop` of many
+small kernels over a batch of lanes; on incoherent rays its per-iteration overhead and the
+lanes that idle in lockstep cost most of the time. On the CPU the same queries therefore run,
+by default, in `_csrc/bvh_traverse.cc`: one ray at a time, the same arithmetic operation for
+operation (no fused multiply-adds), the same tie rules, the same BVH arrays. It is an ordinary
+XLA custom call: it works under `jit`, inside `while_loop` and `shard_map`, under `vmap`
+(a batch of ray batches becomes one flat call, see `_query_fn`) and under `grad` (its inputs
+pass through `stop_gradient`: hits are piecewise constant in the inputs, and derivatives are
+taken through the hit point recomputed from `prim` and the barycentrics). On other platforms
+(GPU, TPU) the JAX traversal runs.
+
+The kernel is compiled on first use with the system's C++ compiler (`$CXX`, else `c++`,
+`g++` or `clang++`) against the FFI headers that ship with jaxlib (`jax.ffi.include_dir()`),
+and cached in `$RADIOMETRIA_CACHE_DIR` (default `$XDG_CACHE_HOME/radiometria`, else
+`~/.cache/radiometria`) under a name that hashes the source, the flags, the compiler, jaxlib
+and the host CPU; the library is written to a temporary file and renamed into place, so
+concurrent processes never load a partial file. Without a compiler, or with
+`RADIOMETRIA_NATIVE=0`, `native_status()` says why and the JAX traversal is used.
+"""
+
+import ctypes
+import functools
+import hashlib
+import os
+import platform
+import shutil
+import subprocess
+import tempfile
+import threading
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+__all__ = ["native_status"]
+
+_SOURCE = Path(__file__).with_name("_csrc") / "bvh_traverse.cc"
+_FLAGS = ("-O3", "-std=c++17", "-shared", "-fPIC", "-ffp-contract=off", "-march=native")
+_SYMBOLS = {
+    (False, "float32"): "RadiometriaBvhClosestF32",
+    (False, "float64"): "RadiometriaBvhClosestF64",
+    (True, "float32"): "RadiometriaBvhAnyF32",
+    (True, "float64"): "RadiometriaBvhAnyF64",
+}
+_lock = threading.Lock()
+_state: dict = {}
+
+
+def _compiler() -> str | None:
+    for name in (os.environ.get("CXX"), "c++", "g++", "clang++"):
+        if name and shutil.which(name):
+            return shutil.which(name)
+    return None
+
+
+def _cache_dir() -> Path:
+    if os.environ.get("RADIOMETRIA_CACHE_DIR"):
+        return Path(os.environ["RADIOMETRIA_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "radiometria"
+
+
+def _cpu_signature() -> str:
+    """The host CPU's model and feature flags (the library is built with -march=native)."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            lines = [ln for ln in fh if ln.startswith(("model name", "flags"))]
+        return "".join(sorted(set(lines)))
+    except OSError:
+        return platform.processor() + platform.machine()
+
+
+def _build(cxx: str) -> Path:
+    """Compile the kernel (or find it in the cache) and return the shared library's path."""
+    import jaxlib
+
+    include = jax.ffi.include_dir()
+    version = subprocess.run(
+        [cxx, "--version"], capture_output=True, text=True, timeout=60, check=False
+    ).stdout
+    key = hashlib.sha256(
+        b"\0".join(
+            s.encode()
+            for s in (
+                _SOURCE.read_text(),
+                " ".join(_FLAGS),
+                version,
+                jaxlib.__version__,
+                _cpu_signature(),
+            )
+        )
+    ).hexdigest()[:20]
+    cache = _cache_dir()
+    target = cache / f"bvh_traverse-{key}.so"
+    if target.exists():
+        return target
+    try:
+        cache.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        cache = Path(tempfile.gettempdir()) / "radiometria"
+        cache.mkdir(parents=True, exist_ok=True)
+        target = cache / target.name
+        if target.exists():
+            return target
+    fd, tmp = tempfile.mkstemp(prefix=".bvh_traverse-", suffix=".so", dir=cache)
+    os.close(fd)
+    try:
+        cmd = [cxx, *_FLAGS, f"-I{include}", str(_SOURCE), "-o", tmp]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, check=False)
+        if proc.returncode != 0:
+            raise RuntimeError(f"`{' '.join(cmd)}` failed:\n{proc.stderr[-4000:]}")
+        os.replace(tmp, target)  # atomic: other processes see the whole file or none
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return target
+
+
+def _load() -> bool:
+    """Build, load and register the kernels once per process; True on success."""
+    with _lock:
+        if "ok" in _state:
+            return _state["ok"]
+        ok, reason = False, ""
+        if os.environ.get("RADIOMETRIA_NATIVE", "1").strip().lower() in ("0", "false", "no"):
+            reason = "disabled by RADIOMETRIA_NATIVE=0"
+        elif (cxx := _compiler()) is None:
+            reason = "no C++ compiler found ($CXX, c++, g++, clang++)"
+        else:
+            try:
+                lib = ctypes.cdll.LoadLibrary(str(_build(cxx)))
+                for symbol in _SYMBOLS.values():
+                    jax.ffi.register_ffi_target(
+                        symbol, jax.ffi.pycapsule(getattr(lib, symbol)), platform="cpu"
+                    )
+                _state["lib"] = lib  # keep the library loaded
+                ok, reason = True, "compiled and loaded"
+            except Exception as e:  # noqa: BLE001 - any failure means: use the JAX traversal
+                reason = f"build or load failed: {e}"
+        _state["ok"], _state["reason"] = ok, reason
+        return ok
+
+
+def native_status() -> tuple[bool, str]:
+    """Whether the native CPU BVH traversal is available, and why (or why not).
+
+    Compiles and loads the kernel on the first call (a few seconds, once per machine: the
+    library is cached; see the module docstring of `radiometria.render._native`).
+
+    **Returns:**
+
+    `(available, reason)`: `available` is True when `intersect_closest` and `intersect_any`
+    run the native kernel on the CPU by default; `reason` says what happened (for example
+    `"no C++ compiler found ..."` or `"disabled by RADIOMETRIA_NATIVE=0"`).
+
+    !!! note "Thesis"
+        Ch. 8 (ray casting); the traversal of `Pharr2023` §7.3.5 and the tests of `Woop2013`
+        and `Ize2013`, as in `intersect_closest`.
+    """
+    ok = _load()
+    return ok, _state["reason"]
+
+
+def resolve_backend(backend: str) -> str:
+    """`"auto"` -> `"native"` on a CPU default backend when the kernel loads, else `"jax"`."""
+    if backend == "jax":
+        return "jax"
+    if backend == "native":
+        if not _load():
+            raise RuntimeError(f"the native BVH traversal is unavailable: {_state['reason']}.")
+        return "native"
+    if backend != "auto":
+        raise ValueError(f"`backend` must be 'auto', 'native' or 'jax', got {backend!r}.")
+    return "native" if jax.default_backend() == "cpu" and _load() else "jax"
+
+
+def _threads() -> int:
+    """Threads per call: XLA's intra-op pool (0) with one CPU device; 1 when the CPU is split
+    into several devices (the render driver then runs one call per device and core)."""
+    return 0 if jax.local_device_count("cpu") <= 1 else 1
+
+
+@functools.cache
+def _query_fn(any_hit: bool, stack_size: int, dtype: str, threads: int):
+    """The FFI call for one query kind, as a `custom_vmap` function of the 8 arrays."""
+    symbol = _SYMBOLS[(any_hit, dtype)]
+
+    def call(boxes, children, tris, prims, o, d, tmin, tmax):
+        n = tmin.shape[0]
+        out = (
+            jax.ShapeDtypeStruct((n,), tris.dtype),
+            jax.ShapeDtypeStruct((n,), jnp.int32),
+            jax.ShapeDtypeStruct((n,), tris.dtype),
+            jax.ShapeDtypeStruct((n,), tris.dtype),
+        )
+        return jax.ffi.ffi_call(symbol, out)(
+            boxes,
+            children,
+            tris,
+            prims,
+            o,
+            d,
+            tmin,
+            tmax,
+            stack_size=np.int64(stack_size),
+            threads=np.int64(threads),
+        )
+
+    fn = jax.custom_batching.custom_vmap(call)
+
+    @fn.def_vmap
+    def _rule(axis_size, in_batched, *args):
+        args = [
+            x if b else jnp.broadcast_to(x, (axis_size, *x.shape))
+            for x, b in zip(args, in_batched, strict=True)
+        ] if any(in_batched[:4]) else list(args)  # fmt: skip
+        if any(in_batched[:4]):  # one BVH per batch element: one call each
+            outs = lax.map(lambda a: fn(*a), tuple(args))
+            return outs, (True,) * 4
+        rays = [
+            x if b else jnp.broadcast_to(x, (axis_size, *x.shape))
+            for x, b in zip(args[4:], in_batched[4:], strict=True)
+        ]
+        flat = [x.reshape(-1, *x.shape[2:]) for x in rays]  # (batch * n, ...)
+        outs = fn(*args[:4], *flat)
+        return tuple(y.reshape(axis_size, -1) for y in outs), (True,) * 4
+
+    return fn
+
+
+def native_query(bvh, o, d, tmin, tmax, *, any_hit: bool):
+    """Run the native traversal; returns `(t, prim, b1, b2)` arrays of shape `(n,)`."""
+    fn = _query_fn(any_hit, int(max(bvh.stack_size, 1)), str(bvh.triangles.dtype), _threads())
+    args = (bvh.node_boxes, bvh.node_children, bvh.triangles, bvh.prim_ids, o, d, tmin, tmax)
+    return fn(*(lax.stop_gradient(x) for x in args))
