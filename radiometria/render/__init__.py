@@ -17,6 +17,7 @@ from ._mesh import (
     triangle_areas as triangle_areas,
     triangle_normals as triangle_normals,
 )
+from ._native import native_status as native_status
 from ._scene import (
     AreaEmitter as AreaEmitter,
     CameraDescription as CameraDescription,

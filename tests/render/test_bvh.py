@@ -10,6 +10,7 @@ from radiometria.render import (
     icosphere,
     intersect_brute_force_closest,
     intersect_closest,
+    intersect_closest as _intersect_closest,
 )
 from radiometria.render._bvh import EMPTY
 
@@ -61,7 +62,11 @@ def test_build_bvh_invariants(max_leaf_size):
     assert depth <= 2 * np.log2(len(f)) + 2
 
 
-def test_build_bvh_edge_cases():
+@pytest.mark.parametrize("backend", ["native", "jax"])
+def test_build_bvh_edge_cases(backend):
+    def intersect_closest(*args):
+        return _intersect_closest(*args, backend=backend)
+
     # empty mesh: every ray misses
     bvh = build_bvh(np.zeros((0, 3)), np.zeros((0, 3), np.int32))
     o, d = np.zeros((4, 3)), np.ones((4, 3))

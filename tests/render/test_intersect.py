@@ -75,11 +75,12 @@ def scenes():
     return out
 
 
+@pytest.mark.parametrize("backend", ["native", "jax"])
 @pytest.mark.parametrize("name", ["soup32", "soup64", "sphere32"])
-def test_intersect_closest_matches_brute_force(scenes, name):
+def test_intersect_closest_matches_brute_force(scenes, name, backend):
     v, f, bvh, o, d, tmax = scenes[name]
     dtype = v.dtype
-    h = intersect_closest(bvh, o, d, tmax)
+    h = intersect_closest(bvh, o, d, tmax, backend=backend)
     ref = intersect_brute_force_closest(TriangleMesh(v, f), o, d, tmax)
     assert h.t.dtype == jnp.dtype(dtype) and h.prim.dtype == jnp.int32
     assert 0.1 < float(np.mean(np.asarray(ref.prim) >= 0)) < 0.95
@@ -103,12 +104,13 @@ def test_brute_force_accepts_bvh_and_mesh(scenes):
     )
 
 
+@pytest.mark.parametrize("backend", ["native", "jax"])
 @pytest.mark.parametrize("name", ["soup32", "soup64"])
-def test_intersect_any_consistent_with_closest(scenes, name):
+def test_intersect_any_consistent_with_closest(scenes, name, backend):
     v, f, bvh, o, d, _ = scenes[name]
     tmax = np.random.default_rng(4).uniform(0.1, 3.0, N_RAYS).astype(v.dtype)
-    closest = intersect_closest(bvh, o, d, np.full(N_RAYS, np.inf, v.dtype))
-    occluded = np.asarray(intersect_any(bvh, o, d, tmax))
+    closest = intersect_closest(bvh, o, d, np.full(N_RAYS, np.inf, v.dtype), backend=backend)
+    occluded = np.asarray(intersect_any(bvh, o, d, tmax, backend=backend))
     expect = np.asarray(closest.t) < tmax
     np.testing.assert_array_equal(occluded, expect)
     assert 0.1 < expect.mean() < 0.9
@@ -142,37 +144,42 @@ def test_watertight_rays_through_edges_and_vertices_never_miss(dtype):
     d = np.concatenate([d, (targets - o_out).astype(dtype)])
     brute = _chunked(lambda oo, dd: intersect_brute_force_closest(mesh, oo, dd).prim, o, d)
     assert np.all(brute >= 0)
-    if dtype == np.float32:  # the traversal too (float64: same code, covered above)
-        hit = _chunked(lambda oo, dd: intersect_closest(bvh, oo, dd), o, d)
-        assert np.all(np.asarray(hit.prim) >= 0)
+    # the native traversal in both dtypes, the JAX traversal in float32 (float64: same code)
+    for backend in ("native", "jax") if dtype == np.float32 else ("native",):
+        hit = _chunked(lambda oo, dd, b=backend: intersect_closest(bvh, oo, dd, backend=b), o, d)
+        assert np.all(np.asarray(hit.prim) >= 0), backend
         np.testing.assert_allclose(np.asarray(hit.t)[-len(targets) :], 1.0, rtol=1e-3)
 
 
-def test_intersect_closest_jit_and_vmap(scenes):
+@pytest.mark.parametrize("backend", ["native", "jax"])
+def test_intersect_closest_jit_and_vmap(scenes, backend):
     v, f, bvh, o, d, tmax = scenes["soup32"]
-    eager = intersect_closest(bvh, o, d, tmax)
-    jitted = eqx.filter_jit(intersect_closest)(bvh, o, d, tmax)
+    eager = intersect_closest(bvh, o, d, tmax, backend=backend)
+    jitted = eqx.filter_jit(intersect_closest)(bvh, o, d, tmax, backend=backend)
     _assert_same_hits(jitted, eager, rtol=0)
-    batched = jax.vmap(lambda oo, dd, tt: intersect_closest(bvh, oo, dd, tt).prim)(
+    batched = jax.vmap(lambda oo, dd, tt: intersect_closest(bvh, oo, dd, tt, backend=backend).prim)(
         o.reshape(4, -1, 3), d.reshape(4, -1, 3), tmax.reshape(4, -1)
     )
     np.testing.assert_array_equal(np.asarray(batched).ravel(), np.asarray(eager.prim))
 
 
-def test_t_min_and_t_max_are_exclusive_bounds():
+@pytest.mark.parametrize("backend", ["native", "jax"])
+def test_t_min_and_t_max_are_exclusive_bounds(backend):
     v = np.array([[0, 0, 1], [1, 0, 1], [0, 1, 1.0]])
     f = np.array([[0, 1, 2]], np.int32)
     bvh = build_bvh(v, f)
     o = np.array([[0.2, 0.2, 0.0]] * 3)
     d = np.array([[0, 0, 1.0]] * 3)
-    h = intersect_closest(bvh, o, d, np.array([2.0, 1.0, 0.5]))
+    h = intersect_closest(bvh, o, d, np.array([2.0, 1.0, 0.5]), backend=backend)
     np.testing.assert_array_equal(np.asarray(h.prim), [0, -1, -1])
     np.testing.assert_allclose(np.asarray(h.t)[0], 1.0)
     np.testing.assert_allclose([float(h.b1[0]), float(h.b2[0])], [0.2, 0.2])
-    h = intersect_closest(bvh, o, d, np.array([2.0, 2.0, 2.0]), t_min=np.array([0.5, 1.0, 1.5]))
+    h = intersect_closest(
+        bvh, o, d, np.array([2.0, 2.0, 2.0]), t_min=np.array([0.5, 1.0, 1.5]), backend=backend
+    )
     np.testing.assert_array_equal(np.asarray(h.prim), [0, -1, -1])
     np.testing.assert_array_equal(
-        np.asarray(intersect_any(bvh, o, d, np.array([2, 1, 0.5]))), [1, 0, 0]
+        np.asarray(intersect_any(bvh, o, d, np.array([2, 1, 0.5]), backend=backend)), [1, 0, 0]
     )
 
 
