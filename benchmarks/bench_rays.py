@@ -3,7 +3,9 @@
 Incoherent closest-hit rays: origins uniform in [-1.5, 1.5]^3 around a unit icosphere of
 1280 to 1.3 M triangles, directions uniform on the sphere (about 27 % of the rays hit). The same
 rays go through `radiometria.render.intersect_closest` (float32, after a warm-up call that
-compiles), through Embree (`embreex`, `pip install embreex`, a benchmark-only dependency; its
+compiles) with both traversals: the native CPU kernel (`backend="native"`, the default on the
+CPU) and the lockstep JAX traversal (`backend="jax"`, what runs on a GPU), then through
+Embree (`embreex`, `pip install embreex`, a benchmark-only dependency; its
 `run` traces one ray at a time on one thread) and, for small meshes, through
 `intersect_brute_force_closest`. The process is pinned to one core by default, as Embree is
 single-threaded here; `--all-cores` lets XLA use every core. The best of `--repeats` runs is
@@ -87,6 +89,7 @@ def main(argv=None) -> int:
         intersect_any,
         intersect_brute_force_closest,
         intersect_closest,
+        native_status,
     )
 
     try:
@@ -111,9 +114,13 @@ def main(argv=None) -> int:
     print(f"{n} incoherent rays, float32, {cores}, jax {jax.__version__} on {platform}")
     if args.cornell:
         _cornell(args, n, cores)
+    ok, reason = native_status()
+    print(f"native traversal: {reason}")
+    backend = "native" if ok else "jax"
     header = (
         f"{'triangles':>10} {'build s':>8} {'depth':>5} {'closest Mray/s':>14} {'any Mray/s':>10} "
-        f"{'Embree Mray/s':>13} {'ours/Embree':>11} {'brute Mray/s':>12} {'hit %':>6}"
+        f"{'JAX Mray/s':>10} {'Embree Mray/s':>13} {'ours/Embree':>11} {'JAX/Embree':>10} "
+        f"{'brute Mray/s':>12} {'hit %':>6}"
     )
     print(header)
     print("-" * len(header))
@@ -122,16 +129,15 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         bvh = build_bvh(v.astype(np.float32), f)
         build_s = time.perf_counter() - t0
-        hit = intersect_closest(bvh, oj, dj, tmax)
-        t_ours = _best_time(
-            lambda bvh=bvh: intersect_closest(bvh, oj, dj, tmax).t.block_until_ready(), args.repeats
-        )
-        t_any = _best_time(
-            lambda bvh=bvh: intersect_any(bvh, oj, dj, tmax).block_until_ready(), args.repeats
-        )
-        ours = n / t_ours / 1e6
-        any_rate = n / t_any / 1e6
-        emb = ratio = brute = float("nan")
+        hit = intersect_closest(bvh, oj, dj, tmax, backend=backend)
+
+        def rate(fn):
+            return n / _best_time(lambda: jax.block_until_ready(fn()), args.repeats) / 1e6
+
+        ours = rate(lambda bvh=bvh: intersect_closest(bvh, oj, dj, tmax, backend=backend).t)
+        any_rate = rate(lambda bvh=bvh: intersect_any(bvh, oj, dj, tmax, backend=backend))
+        jax_rate = rate(lambda bvh=bvh: intersect_closest(bvh, oj, dj, tmax, backend="jax").t)
+        emb = ratio = jax_ratio = brute = float("nan")
         if rtcs is not None:
             scene = rtcs.EmbreeScene()
             EmbreeMesh(scene, v.astype(np.float32)[f])
@@ -142,7 +148,7 @@ def main(argv=None) -> int:
                     f"warning: Embree and radiometria disagree on {100 * (1 - agree):.3f} % of rays"
                 )
             emb = n / _best_time(lambda scene=scene: scene.run(o, d), args.repeats) / 1e6
-            ratio = ours / emb
+            ratio, jax_ratio = ours / emb, jax_rate / emb
         if len(f) <= args.brute_max:
             mesh = TriangleMesh(jnp.asarray(v, jnp.float32), f)
             m = min(n, max(4096, int(2e8 / len(f))))  # bound the work
@@ -157,7 +163,8 @@ def main(argv=None) -> int:
         hit_pct = 100 * float(np.mean(np.asarray(hit.prim) >= 0))
         print(
             f"{len(f):>10} {build_s:>8.2f} {bvh.stack_size:>5} {ours:>14.3f} {any_rate:>10.3f} "
-            f"{emb:>13.3f} {ratio:>11.3f} {brute:>12.3f} {hit_pct:>6.1f}",
+            f"{jax_rate:>10.3f} {emb:>13.3f} {ratio:>11.3f} {jax_ratio:>10.3f} {brute:>12.3f} "
+            f"{hit_pct:>6.1f}",
             flush=True,
         )
     return 0
