@@ -39,12 +39,23 @@ from jax import lax
 __all__ = ["native_status"]
 
 _SOURCE = Path(__file__).with_name("_csrc") / "bvh_traverse.cc"
-_FLAGS = ("-O3", "-std=c++17", "-shared", "-fPIC", "-ffp-contract=off", "-march=native")
+# -ffp-contract=off: no fused multiply-adds, every operation rounds as written (the results do
+# not depend on the compiler); -fno-trapping-math lets the brute force's branch-free loop be
+# vectorised (it changes no result, only what may be assumed about floating-point traps).
+_FLAGS = (
+    "-O3",
+    "-std=c++17",
+    "-shared",
+    "-fPIC",
+    "-ffp-contract=off",
+    "-fno-trapping-math",
+    "-march=native",
+)
 _SYMBOLS = {
-    (False, "float32"): "RadiometriaBvhClosestF32",
-    (False, "float64"): "RadiometriaBvhClosestF64",
-    (True, "float32"): "RadiometriaBvhAnyF32",
-    (True, "float64"): "RadiometriaBvhAnyF64",
+    (kind, any_hit, dtype): f"Radiometria{kind}{'Any' if any_hit else 'Closest'}F{dtype[-2:]}"
+    for kind in ("Bvh", "Brute")
+    for any_hit in (False, True)
+    for dtype in ("float32", "float64")
 }
 _lock = threading.Lock()
 _state: dict = {}
@@ -185,55 +196,58 @@ def _threads() -> int:
 
 
 @functools.cache
-def _query_fn(any_hit: bool, stack_size: int, dtype: str, threads: int):
-    """The FFI call for one query kind, as a `custom_vmap` function of the 8 arrays."""
-    symbol = _SYMBOLS[(any_hit, dtype)]
+def _query_fn(symbol: str, n_geometry: int, **attrs):
+    """The FFI call `symbol` as a `custom_vmap` function of `n_geometry` geometry arrays and the
+    four ray arrays `(o, d, tmin, tmax)`; it returns `(t, prim, b1, b2)`.
 
-    def call(boxes, children, tris, prims, o, d, tmin, tmax):
-        n = tmin.shape[0]
+    Under `vmap`, batched rays with unbatched geometry become one flat call of `batch * n`
+    rays (nested `vmap` flattens level by level); batched geometry (one BVH per batch
+    element) becomes one call per element (`lax.map`)."""
+    attrs = {k: np.int64(v) for k, v in attrs.items()}
+
+    def call(*args):
+        n = args[-2].shape[0]
+        dt = args[-1].dtype
         out = (
-            jax.ShapeDtypeStruct((n,), tris.dtype),
+            jax.ShapeDtypeStruct((n,), dt),
             jax.ShapeDtypeStruct((n,), jnp.int32),
-            jax.ShapeDtypeStruct((n,), tris.dtype),
-            jax.ShapeDtypeStruct((n,), tris.dtype),
+            jax.ShapeDtypeStruct((n,), dt),
+            jax.ShapeDtypeStruct((n,), dt),
         )
-        return jax.ffi.ffi_call(symbol, out)(
-            boxes,
-            children,
-            tris,
-            prims,
-            o,
-            d,
-            tmin,
-            tmax,
-            stack_size=np.int64(stack_size),
-            threads=np.int64(threads),
-        )
+        return jax.ffi.ffi_call(symbol, out)(*args, **attrs)
 
     fn = jax.custom_batching.custom_vmap(call)
 
+    def batched(axis_size, x, b):
+        return x if b else jnp.broadcast_to(x, (axis_size, *x.shape))
+
     @fn.def_vmap
     def _rule(axis_size, in_batched, *args):
-        args = [
-            x if b else jnp.broadcast_to(x, (axis_size, *x.shape))
-            for x, b in zip(args, in_batched, strict=True)
-        ] if any(in_batched[:4]) else list(args)  # fmt: skip
-        if any(in_batched[:4]):  # one BVH per batch element: one call each
-            outs = lax.map(lambda a: fn(*a), tuple(args))
-            return outs, (True,) * 4
+        if any(in_batched[:n_geometry]):  # one geometry per batch element: one call each
+            args = tuple(batched(axis_size, x, b) for x, b in zip(args, in_batched, strict=True))
+            return lax.map(lambda a: fn(*a), args), (True,) * 4
         rays = [
-            x if b else jnp.broadcast_to(x, (axis_size, *x.shape))
-            for x, b in zip(args[4:], in_batched[4:], strict=True)
+            batched(axis_size, x, b)
+            for x, b in zip(args[n_geometry:], in_batched[n_geometry:], strict=True)
         ]
         flat = [x.reshape(-1, *x.shape[2:]) for x in rays]  # (batch * n, ...)
-        outs = fn(*args[:4], *flat)
+        outs = fn(*args[:n_geometry], *flat)
         return tuple(y.reshape(axis_size, -1) for y in outs), (True,) * 4
 
     return fn
 
 
 def native_query(bvh, o, d, tmin, tmax, *, any_hit: bool):
-    """Run the native traversal; returns `(t, prim, b1, b2)` arrays of shape `(n,)`."""
-    fn = _query_fn(any_hit, int(max(bvh.stack_size, 1)), str(bvh.triangles.dtype), _threads())
+    """BVH traversal in native code; returns `(t, prim, b1, b2)` arrays of shape `(n,)`."""
+    symbol = _SYMBOLS[("Bvh", any_hit, str(bvh.triangles.dtype))]
+    fn = _query_fn(symbol, 4, stack_size=int(max(bvh.stack_size, 1)), threads=_threads())
     args = (bvh.node_boxes, bvh.node_children, bvh.triangles, bvh.prim_ids, o, d, tmin, tmax)
     return fn(*(lax.stop_gradient(x) for x in args))
+
+
+def native_brute_query(rows, tri, o, d, tmin, tmax, *, any_hit: bool):
+    """Brute force in native code (`rows`: `(9, f)` sorted corners, `tri`: `(f, 9)` corners);
+    returns `(t, prim, b1, b2)` arrays of shape `(n,)`."""
+    symbol = _SYMBOLS[("Brute", any_hit, str(tri.dtype))]
+    fn = _query_fn(symbol, 2, threads=_threads())
+    return fn(*(lax.stop_gradient(x) for x in (rows, tri, o, d, tmin, tmax)))

@@ -94,6 +94,25 @@ def test_intersect_closest_matches_brute_force(scenes, name, backend):
     np.testing.assert_allclose(p, q, atol=1e-4 if dtype == np.float32 else 1e-10)
 
 
+@pytest.mark.parametrize("name", ["soup32", "soup64", "sphere32"])
+def test_native_brute_force_matches_the_jax_loop(scenes, name):
+    """The two brute-force backends: same triangles, `t` and barycentrics to rounding, same
+    occlusion; also under vmap (a batch of ray batches)."""
+    v, f, _, o, d, tmax = scenes[name]
+    mesh = TriangleMesh(v, f)
+    native = intersect_brute_force_closest(mesh, o, d, tmax, backend="native")
+    ref = intersect_brute_force_closest(mesh, o, d, tmax, backend="jax")
+    _assert_same_hits(native, ref, rtol=1e-6 if v.dtype == np.float32 else 1e-12)
+    np.testing.assert_array_equal(
+        np.asarray(intersect_brute_force_any(mesh, o, d, tmax, backend="native")),
+        np.asarray(intersect_brute_force_any(mesh, o, d, tmax, backend="jax")),
+    )
+    batched = jax.vmap(
+        lambda oo, dd, tt: intersect_brute_force_closest(mesh, oo, dd, tt, backend="native").prim
+    )(o.reshape(4, -1, 3), d.reshape(4, -1, 3), tmax.reshape(4, -1))
+    np.testing.assert_array_equal(np.asarray(batched).ravel(), np.asarray(ref.prim))
+
+
 def test_brute_force_accepts_bvh_and_mesh(scenes):
     v, f, bvh, o, d, tmax = scenes["soup64"]
     a = intersect_brute_force_closest(bvh, o, d, tmax)
@@ -142,8 +161,13 @@ def test_watertight_rays_through_edges_and_vertices_never_miss(dtype):
     o_out = (targets + (targets - centre) * dtype(2.0)).astype(dtype)
     o = np.concatenate([o, o_out])
     d = np.concatenate([d, (targets - o_out).astype(dtype)])
-    brute = _chunked(lambda oo, dd: intersect_brute_force_closest(mesh, oo, dd).prim, o, d)
-    assert np.all(brute >= 0)
+    for backend in ("native", "jax"):
+        brute = _chunked(
+            lambda oo, dd, b=backend: intersect_brute_force_closest(mesh, oo, dd, backend=b).prim,
+            o,
+            d,
+        )
+        assert np.all(brute >= 0), backend
     # the native traversal in both dtypes, the JAX traversal in float32 (float64: same code)
     for backend in ("native", "jax") if dtype == np.float32 else ("native",):
         hit = _chunked(lambda oo, dd, b=backend: intersect_closest(bvh, oo, dd, backend=b), o, d)

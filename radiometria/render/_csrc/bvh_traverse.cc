@@ -108,6 +108,26 @@ inline bool triangle_test(const Ray<T>& r, const T* v, T& t, T& b1, T& b2) {
   return true;
 }
 
+// Barycentrics of a known hit, as `_brute_closest` recomputes them (no range checks).
+template <typename T>
+inline void barycentrics(const Ray<T>& r, const T* v, T& b1, T& b2) {
+  T cx[3], cy[3];
+  for (int c = 0; c < 3; ++c) {
+    const T* p = v + 3 * c;
+    const T pz = p[r.kz] - r.oz;
+    cx[c] = (p[r.kx] - r.ox) - r.sx * pz;
+    cy[c] = (p[r.ky] - r.oy) - r.sy * pz;
+  }
+  const T u = edge(cx[2], cy[2], cx[1], cy[1]);
+  const T vv = edge(cx[0], cy[0], cx[2], cy[2]);
+  const T w = edge(cx[1], cy[1], cx[0], cy[0]);
+  const T det = u + vv + w;
+  const bool ok = ((u >= 0 && vv >= 0 && w >= 0) || (u <= 0 && vv <= 0 && w <= 0)) && det != 0;
+  const T inv_det = T(1) / (ok ? det : T(1));
+  b1 = vv * inv_det;
+  b2 = w * inv_det;
+}
+
 template <typename T>
 struct Tree {
   const T* boxes;          // (nodes, 12)
@@ -275,6 +295,174 @@ ffi::Error query(ffi::ThreadPool pool, ffi::Buffer<DT> boxes, ffi::Buffer<ffi::S
   return ffi::Error::Success();
 }
 
+// ---- brute force: every ray against every triangle, for scenes of a few dozen triangles -----
+//
+// The arithmetic of `_brute_loop` in `_intersect.py`: the corners of each triangle come sorted
+// in one global (lexicographic) order, rows (9, f), so a shared edge is evaluated on the same
+// operands in both triangles; a strict t < t_best keeps the lowest face index on ties. Rays
+// go in blocks of kBlock, structure of arrays in L1, and the loop over the rays of a block is
+// branch-free so that the compiler vectorises it (the triangles are the outer loop).
+
+constexpr int kBlock = 256;  // rays per block
+constexpr int kLanes = 16;   // each class is padded to a multiple of this (an AVX-512 register)
+constexpr int kSlots = kBlock + 3 * kLanes;
+
+// Per-block ray state, structure of arrays, the rays grouped by their axis kz; padding slots
+// hold rays that never hit (t_lo = +inf) and are not written back (ray = -1).
+template <typename T>
+struct Block {
+  alignas(64) T ox[kSlots], oy[kSlots], oz[kSlots], sx[kSlots], sy[kSlots], sz[kSlots];
+  alignas(64) T tlo[kSlots], tbest[kSlots];
+  alignas(64) int32_t best[kSlots];
+  int64_t ray[kSlots];  // the ray of each slot, -1 for padding
+};
+
+// One triangle against the slots [begin, end) of a block, whose rays all have the axis KZ (so
+// the permutation to (kx, ky, kz) is known at compile time and the loop vectorises).
+template <typename T, bool kAny, int KZ>
+inline void brute_class(const T* q, int32_t kk, Block<T>& b, int begin, int end) {
+  constexpr int KX = KZ == 2 ? 0 : KZ + 1;
+  constexpr int KY = KX == 2 ? 0 : KX + 1;
+  const T ax0 = q[KX], ay0 = q[KY], az0 = q[KZ];
+  const T bx0 = q[3 + KX], by0 = q[3 + KY], bz0 = q[3 + KZ];
+  const T cx0 = q[6 + KX], cy0 = q[6 + KY], cz0 = q[6 + KZ];
+#pragma GCC ivdep
+  for (int i = begin; i < end; ++i) {
+    const T apz = az0 - b.oz[i], bpz = bz0 - b.oz[i], cpz = cz0 - b.oz[i];
+    const T ax = (ax0 - b.ox[i]) - b.sx[i] * apz;
+    const T ay = (ay0 - b.oy[i]) - b.sy[i] * apz;
+    const T bx = (bx0 - b.ox[i]) - b.sx[i] * bpz;
+    const T by = (by0 - b.oy[i]) - b.sy[i] * bpz;
+    const T cx = (cx0 - b.ox[i]) - b.sx[i] * cpz;
+    const T cy = (cy0 - b.oy[i]) - b.sy[i] * cpz;
+    const T az = b.sz[i] * apz, bz = b.sz[i] * bpz, cz = b.sz[i] * cpz;
+    const T e_ab = ax * by - ay * bx;
+    const T e_bc = bx * cy - by * cx;
+    const T e_ac = ax * cy - ay * cx;
+    const T u = -e_bc, v = e_ac, w = -e_ab;
+    const bool inside = ((u >= 0) & (v >= 0) & (w >= 0)) | ((u <= 0) & (v <= 0) & (w <= 0));
+    const T det = u + v + w;
+    const T t = (u * az + v * bz + w * cz) / (det != 0 ? det : T(1));
+    const bool hit = inside & (det != 0) & (t > b.tlo[i]) & (t < b.tbest[i]);
+    if (!kAny) b.tbest[i] = hit ? t : b.tbest[i];
+    b.best[i] = hit ? kk : b.best[i];
+  }
+}
+
+template <typename T, bool kAny>
+void brute_block(const T* rows, int64_t f, const T* tri, const T* o, const T* d, const T* lo,
+                 const T* hi, int64_t begin, int64_t end, T* t_out, int32_t* prim_out,
+                 T* b1_out, T* b2_out) {
+  Block<T> b;
+  for (int64_t base = begin; base < end; base += kBlock) {
+    const int m = static_cast<int>(std::min<int64_t>(kBlock, end - base));
+    // group the block's rays by kz: slots [0, e0) kz = 0, [e0, e1) kz = 1, [e1, m) kz = 2
+    int count[3] = {0, 0, 0};
+    int axis[kBlock];
+    for (int i = 0; i < m; ++i) {
+      const T* dd = d + 3 * (base + i);
+      const T ax = std::fabs(dd[0]), ay = std::fabs(dd[1]), az = std::fabs(dd[2]);
+      axis[i] = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+      ++count[axis[i]];
+    }
+    auto padded = [](int c) { return (c + kLanes - 1) / kLanes * kLanes; };
+    const int e0 = padded(count[0]), e1 = e0 + padded(count[1]), e2 = e1 + padded(count[2]);
+    for (int s = 0; s < e2; ++s) {  // padding: rays that never hit
+      b.ox[s] = b.oy[s] = b.oz[s] = b.sx[s] = b.sy[s] = b.sz[s] = T(0);
+      b.tlo[s] = std::numeric_limits<T>::infinity();
+      b.tbest[s] = T(0);
+      b.best[s] = -1;
+      b.ray[s] = -1;
+    }
+    int next[3] = {0, e0, e1};
+    for (int i = 0; i < m; ++i) {
+      const int64_t g = base + i;
+      const Ray<T> r = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
+      const int s = next[axis[i]]++;
+      b.ox[s] = r.ox, b.oy[s] = r.oy, b.oz[s] = r.oz;
+      b.sx[s] = r.sx, b.sy[s] = r.sy, b.sz[s] = r.sz;
+      b.tlo[s] = r.t_lo, b.tbest[s] = r.t_hi;
+      b.best[s] = -1;
+      b.ray[s] = g;
+    }
+    for (int64_t k = 0; k < f; ++k) {
+      T q[9];
+      for (int j = 0; j < 9; ++j) q[j] = rows[j * f + k];
+      const int32_t kk = static_cast<int32_t>(k);
+      brute_class<T, kAny, 0>(q, kk, b, 0, e0);
+      brute_class<T, kAny, 1>(q, kk, b, e0, e1);
+      brute_class<T, kAny, 2>(q, kk, b, e1, e2);
+    }
+    for (int s = 0; s < e2; ++s) {
+      const int64_t g = b.ray[s];
+      if (g < 0) continue;
+      const int32_t p = b.best[s];
+      prim_out[g] = p;
+      t_out[g] = (p >= 0 && !kAny) ? b.tbest[s] : std::numeric_limits<T>::infinity();
+      T b1 = 0, b2 = 0;
+      if (p >= 0 && !kAny) {
+        const Ray<T> r = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
+        barycentrics(r, tri + 9 * static_cast<int64_t>(p), b1, b2);
+      }
+      b1_out[g] = b1;
+      b2_out[g] = b2;
+    }
+  }
+}
+
+template <ffi::DataType DT, bool kAny>
+ffi::Error brute(ffi::ThreadPool pool, ffi::Buffer<DT> rows, ffi::Buffer<DT> tris,
+                 ffi::Buffer<DT> origins, ffi::Buffer<DT> directions, ffi::Buffer<DT> t_min,
+                 ffi::Buffer<DT> t_max, int64_t threads, ffi::Result<ffi::Buffer<DT>> t_out,
+                 ffi::Result<ffi::Buffer<ffi::S32>> prim_out,
+                 ffi::Result<ffi::Buffer<DT>> b1_out, ffi::Result<ffi::Buffer<DT>> b2_out) {
+  using T = ffi::NativeType<DT>;
+  const int64_t n = static_cast<int64_t>(t_min.element_count());
+  const int64_t f = static_cast<int64_t>(tris.element_count() / 9);
+  if (origins.element_count() != static_cast<size_t>(3 * n) ||
+      directions.element_count() != static_cast<size_t>(3 * n) ||
+      t_max.element_count() != static_cast<size_t>(n) ||
+      t_out->element_count() != static_cast<size_t>(n)) {
+    return ffi::Error::InvalidArgument("radiometria brute force: inconsistent ray buffer sizes");
+  }
+  if (rows.element_count() != tris.element_count() || tris.element_count() != size_t(9 * f)) {
+    return ffi::Error::InvalidArgument("radiometria brute force: inconsistent triangle buffers");
+  }
+  const T* r = rows.typed_data();
+  const T* tr = tris.typed_data();
+  const T* o = origins.typed_data();
+  const T* d = directions.typed_data();
+  const T* lo = t_min.typed_data();
+  const T* hi = t_max.typed_data();
+  T* to = t_out->typed_data();
+  int32_t* po = prim_out->typed_data();
+  T* b1o = b1_out->typed_data();
+  T* b2o = b2_out->typed_data();
+  auto body = [&](int64_t begin, int64_t end) {
+    brute_block<T, kAny>(r, f, tr, o, d, lo, hi, begin, end, to, po, b1o, b2o);
+  };
+  const int64_t nt = threads > 0 ? threads : std::max<int64_t>(1, pool.num_threads());
+  parallel_chunks(pool, n, 4096, nt, body);
+  return ffi::Error::Success();
+}
+
+template <ffi::DataType DT>
+constexpr auto bind_brute() {
+  return ffi::Ffi::Bind()
+      .Ctx<ffi::ThreadPool>()
+      .template Arg<ffi::Buffer<DT>>()
+      .template Arg<ffi::Buffer<DT>>()
+      .template Arg<ffi::Buffer<DT>>()
+      .template Arg<ffi::Buffer<DT>>()
+      .template Arg<ffi::Buffer<DT>>()
+      .template Arg<ffi::Buffer<DT>>()
+      .template Attr<int64_t>("threads")
+      .template Ret<ffi::Buffer<DT>>()
+      .template Ret<ffi::Buffer<ffi::S32>>()
+      .template Ret<ffi::Buffer<DT>>()
+      .template Ret<ffi::Buffer<DT>>();
+}
+
 template <ffi::DataType DT, bool kAny>
 constexpr auto bind() {
   return ffi::Ffi::Bind()
@@ -305,3 +493,11 @@ XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhAnyF32, (query<ffi::F32, true>),
                               (bind<ffi::F32, true>()));
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhAnyF64, (query<ffi::F64, true>),
                               (bind<ffi::F64, true>()));
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteClosestF32, (brute<ffi::F32, false>),
+                              (bind_brute<ffi::F32>()));
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteClosestF64, (brute<ffi::F64, false>),
+                              (bind_brute<ffi::F64>()));
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteAnyF32, (brute<ffi::F32, true>),
+                              (bind_brute<ffi::F32>()));
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteAnyF64, (brute<ffi::F64, true>),
+                              (bind_brute<ffi::F64>()));
