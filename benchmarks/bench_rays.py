@@ -11,9 +11,9 @@ Embree (`embreex`, `pip install embreex`, a benchmark-only dependency; its
 single-threaded here; `--all-cores` lets XLA use every core. The best of `--repeats` runs is
 reported.
 
-`--cornell` first times the brute-force queries on the 36-triangle Cornell box (what the
-renderer uses for scenes of <= 64 triangles): rays with origins uniform in the room's box and
-uniform directions, closest-hit and any-hit, under `jax.jit` (no eager padding), warm.
+`--cornell` first times the brute-force queries (native and JAX) on the 36-triangle Cornell box
+(what the renderer uses for scenes of <= 64 triangles): rays with origins uniform in the room's
+box and uniform directions, closest-hit and any-hit, under `jax.jit` (no eager padding), warm.
 
     .venv/bin/python benchmarks/bench_rays.py [--subdivisions 3 5 6 8] [--rays 262144]
     .venv/bin/python benchmarks/bench_rays.py --cornell --all-cores --subdivisions
@@ -55,14 +55,15 @@ def _cornell(args, n: int, cores: str) -> None:
     o = jnp.asarray(rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32))
     d = jnp.asarray(rng.normal(size=(n, 3)).astype(np.float32))
     tmax = jnp.full(n, jnp.inf, jnp.float32)
-    closest = jax.jit(intersect_brute_force_closest)
-    any_hit = jax.jit(intersect_brute_force_any)
-    t_c = _best_time(lambda: closest(mesh, o, d, tmax).t.block_until_ready(), args.repeats)
-    t_a = _best_time(lambda: any_hit(mesh, o, d, tmax).block_until_ready(), args.repeats)
-    print(
-        f"Cornell box, {len(scene.faces)} triangles, brute force, {n} rays, float32, {cores}: "
-        f"closest {n / t_c / 1e6:.2f} Mray/s, any {n / t_a / 1e6:.2f} Mray/s"
-    )
+    for backend in ("native", "jax"):
+        closest = jax.jit(lambda *a, b=backend: intersect_brute_force_closest(*a, backend=b))
+        any_hit = jax.jit(lambda *a, b=backend: intersect_brute_force_any(*a, backend=b))
+        t_c = _best_time(lambda c=closest: c(mesh, o, d, tmax).t.block_until_ready(), args.repeats)
+        t_a = _best_time(lambda a=any_hit: a(mesh, o, d, tmax).block_until_ready(), args.repeats)
+        print(
+            f"Cornell box, {len(scene.faces)} triangles, brute force ({backend}), {n} rays, "
+            f"float32, {cores}: closest {n / t_c / 1e6:.2f} Mray/s, any {n / t_a / 1e6:.2f} Mray/s"
+        )
 
 
 def main(argv=None) -> int:
