@@ -249,6 +249,40 @@ void parallel_chunks(ffi::ThreadPool& pool, int64_t n, int64_t chunk, int64_t th
   }
 }
 
+// The ray buffers of a query: inputs o, d (n, 3), t_min, t_max (n,); outputs t, prim, b1, b2.
+template <typename T>
+struct RayIO {
+  int64_t n;
+  const T *o, *d, *lo, *hi;
+  T* t;
+  int32_t* prim;
+  T *b1, *b2;
+};
+
+// Checks the ray buffers against one ray count and fills `io`; false on a size mismatch.
+template <ffi::DataType DT>
+bool ray_io(ffi::Buffer<DT> origins, ffi::Buffer<DT> directions, ffi::Buffer<DT> t_min,
+            ffi::Buffer<DT> t_max, ffi::Result<ffi::Buffer<DT>>& t_out,
+            ffi::Result<ffi::Buffer<ffi::S32>>& prim_out, ffi::Result<ffi::Buffer<DT>>& b1_out,
+            ffi::Result<ffi::Buffer<DT>>& b2_out, RayIO<ffi::NativeType<DT>>& io) {
+  const size_t n = t_min.element_count();
+  if (origins.element_count() != 3 * n || directions.element_count() != 3 * n ||
+      t_max.element_count() != n || t_out->element_count() != n ||
+      prim_out->element_count() != n || b1_out->element_count() != n ||
+      b2_out->element_count() != n) {
+    return false;
+  }
+  io = {static_cast<int64_t>(n),  origins.typed_data(), directions.typed_data(),
+        t_min.typed_data(),       t_max.typed_data(),   t_out->typed_data(),
+        prim_out->typed_data(),   b1_out->typed_data(), b2_out->typed_data()};
+  return true;
+}
+
+// Threads for one call: `threads`, or the size of XLA's intra-op pool when it is <= 0.
+inline int64_t thread_count(ffi::ThreadPool& pool, int64_t threads) {
+  return threads > 0 ? threads : std::max<int64_t>(1, pool.num_threads());
+}
+
 template <ffi::DataType DT, bool kAny>
 ffi::Error query(ffi::ThreadPool pool, ffi::Buffer<DT> boxes, ffi::Buffer<ffi::S32> children,
                  ffi::Buffer<DT> tris, ffi::Buffer<ffi::S32> prims, ffi::Buffer<DT> origins,
@@ -257,11 +291,8 @@ ffi::Error query(ffi::ThreadPool pool, ffi::Buffer<DT> boxes, ffi::Buffer<ffi::S
                  ffi::Result<ffi::Buffer<ffi::S32>> prim_out,
                  ffi::Result<ffi::Buffer<DT>> b1_out, ffi::Result<ffi::Buffer<DT>> b2_out) {
   using T = ffi::NativeType<DT>;
-  const int64_t n = static_cast<int64_t>(t_min.element_count());
-  if (origins.element_count() != static_cast<size_t>(3 * n) ||
-      directions.element_count() != static_cast<size_t>(3 * n) ||
-      t_max.element_count() != static_cast<size_t>(n) ||
-      t_out->element_count() != static_cast<size_t>(n)) {
+  RayIO<T> io;
+  if (!ray_io<DT>(origins, directions, t_min, t_max, t_out, prim_out, b1_out, b2_out, io)) {
     return ffi::Error::InvalidArgument("radiometria BVH query: inconsistent ray buffer sizes");
   }
   if (boxes.element_count() != 6 * children.element_count() ||
@@ -270,28 +301,19 @@ ffi::Error query(ffi::ThreadPool pool, ffi::Buffer<DT> boxes, ffi::Buffer<ffi::S
   }
   Tree<T> tree{boxes.typed_data(), children.typed_data(), tris.typed_data(),
                prims.typed_data(), std::max<int64_t>(stack_size, 1), T(1) + T(2) * gamma3<T>()};
-  const T* o = origins.typed_data();
-  const T* d = directions.typed_data();
-  const T* lo = t_min.typed_data();
-  const T* hi = t_max.typed_data();
-  T* to = t_out->typed_data();
-  int32_t* po = prim_out->typed_data();
-  T* b1o = b1_out->typed_data();
-  T* b2o = b2_out->typed_data();
   auto body = [&](int64_t begin, int64_t end) {
     std::vector<int32_t> stack(static_cast<size_t>(tree.stack_size));
     for (int64_t i = begin; i < end; ++i) {
-      const Ray<T> r = setup_ray<T>(o + 3 * i, d + 3 * i, lo[i], hi[i]);
+      const Ray<T> r = setup_ray<T>(io.o + 3 * i, io.d + 3 * i, io.lo[i], io.hi[i]);
       T t = std::numeric_limits<T>::infinity(), b1 = 0, b2 = 0;
       int32_t p = trace<T, kAny>(tree, r, stack.data(), t, b1, b2);
-      to[i] = p >= 0 ? t : std::numeric_limits<T>::infinity();
-      po[i] = p;
-      b1o[i] = p >= 0 && !kAny ? b1 : T(0);
-      b2o[i] = p >= 0 && !kAny ? b2 : T(0);
+      io.t[i] = p >= 0 ? t : std::numeric_limits<T>::infinity();
+      io.prim[i] = p;
+      io.b1[i] = p >= 0 && !kAny ? b1 : T(0);
+      io.b2[i] = p >= 0 && !kAny ? b2 : T(0);
     }
   };
-  const int64_t nt = threads > 0 ? threads : std::max<int64_t>(1, pool.num_threads());
-  parallel_chunks(pool, n, 4096, nt, body);
+  parallel_chunks(pool, io.n, 4096, thread_count(pool, threads), body);
   return ffi::Error::Success();
 }
 
@@ -350,9 +372,9 @@ inline void brute_class(const T* q, int32_t kk, Block<T>& b, int begin, int end)
 }
 
 template <typename T, bool kAny>
-void brute_block(const T* rows, int64_t f, const T* tri, const T* o, const T* d, const T* lo,
-                 const T* hi, int64_t begin, int64_t end, T* t_out, int32_t* prim_out,
-                 T* b1_out, T* b2_out) {
+void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int64_t begin,
+                 int64_t end) {
+  const T *o = io.o, *d = io.d, *lo = io.lo, *hi = io.hi;
   Block<T> b;
   for (int64_t base = begin; base < end; base += kBlock) {
     const int m = static_cast<int>(std::min<int64_t>(kBlock, end - base));
@@ -397,15 +419,15 @@ void brute_block(const T* rows, int64_t f, const T* tri, const T* o, const T* d,
       const int64_t g = b.ray[s];
       if (g < 0) continue;
       const int32_t p = b.best[s];
-      prim_out[g] = p;
-      t_out[g] = (p >= 0 && !kAny) ? b.tbest[s] : std::numeric_limits<T>::infinity();
+      io.prim[g] = p;
+      io.t[g] = (p >= 0 && !kAny) ? b.tbest[s] : std::numeric_limits<T>::infinity();
       T b1 = 0, b2 = 0;
       if (p >= 0 && !kAny) {
         const Ray<T> r = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
         barycentrics(r, tri + 9 * static_cast<int64_t>(p), b1, b2);
       }
-      b1_out[g] = b1;
-      b2_out[g] = b2;
+      io.b1[g] = b1;
+      io.b2[g] = b2;
     }
   }
 }
@@ -417,12 +439,9 @@ ffi::Error brute(ffi::ThreadPool pool, ffi::Buffer<DT> rows, ffi::Buffer<DT> tri
                  ffi::Result<ffi::Buffer<ffi::S32>> prim_out,
                  ffi::Result<ffi::Buffer<DT>> b1_out, ffi::Result<ffi::Buffer<DT>> b2_out) {
   using T = ffi::NativeType<DT>;
-  const int64_t n = static_cast<int64_t>(t_min.element_count());
   const int64_t f = static_cast<int64_t>(tris.element_count() / 9);
-  if (origins.element_count() != static_cast<size_t>(3 * n) ||
-      directions.element_count() != static_cast<size_t>(3 * n) ||
-      t_max.element_count() != static_cast<size_t>(n) ||
-      t_out->element_count() != static_cast<size_t>(n)) {
+  RayIO<T> io;
+  if (!ray_io<DT>(origins, directions, t_min, t_max, t_out, prim_out, b1_out, b2_out, io)) {
     return ffi::Error::InvalidArgument("radiometria brute force: inconsistent ray buffer sizes");
   }
   if (rows.element_count() != tris.element_count() || tris.element_count() != size_t(9 * f)) {
@@ -430,19 +449,10 @@ ffi::Error brute(ffi::ThreadPool pool, ffi::Buffer<DT> rows, ffi::Buffer<DT> tri
   }
   const T* r = rows.typed_data();
   const T* tr = tris.typed_data();
-  const T* o = origins.typed_data();
-  const T* d = directions.typed_data();
-  const T* lo = t_min.typed_data();
-  const T* hi = t_max.typed_data();
-  T* to = t_out->typed_data();
-  int32_t* po = prim_out->typed_data();
-  T* b1o = b1_out->typed_data();
-  T* b2o = b2_out->typed_data();
   auto body = [&](int64_t begin, int64_t end) {
-    brute_block<T, kAny>(r, f, tr, o, d, lo, hi, begin, end, to, po, b1o, b2o);
+    brute_block<T, kAny>(r, f, tr, io, begin, end);
   };
-  const int64_t nt = threads > 0 ? threads : std::max<int64_t>(1, pool.num_threads());
-  parallel_chunks(pool, n, 4096, nt, body);
+  parallel_chunks(pool, io.n, 4096, thread_count(pool, threads), body);
   return ffi::Error::Success();
 }
 
