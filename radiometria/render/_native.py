@@ -1,10 +1,11 @@
-"""Native CPU BVH traversal: a C++ kernel called through XLA's FFI (`jax.ffi`) (thesis ch. 8).
+"""Native CPU ray casting: C++ kernels called through XLA's FFI (`jax.ffi`) (thesis ch. 8).
 
 XLA:CPU runs the lockstep JAX traversal (`_intersect._traverse`) as a `while_loop` of many
 small kernels over a batch of lanes; on incoherent rays its per-iteration overhead and the
 lanes that idle in lockstep cost most of the time. On the CPU the same queries therefore run,
 by default, in `_csrc/bvh_traverse.cc`: one ray at a time, the same arithmetic operation for
-operation (no fused multiply-adds), the same tie rules, the same BVH arrays. It is an ordinary
+operation (no fused multiply-adds), the same tie rules, the same BVH arrays. The brute-force
+queries of tiny scenes run there too, vectorised across blocks of rays. It is an ordinary
 XLA custom call: it works under `jit`, inside `while_loop` and `shard_map`, under `vmap`
 (a batch of ray batches becomes one flat call, see `_query_fn`) and under `grad` (its inputs
 pass through `stop_gradient`: hits are piecewise constant in the inputs, and derivatives are
@@ -36,6 +37,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
+from .._checks import check_choice
+
 __all__ = ["native_status"]
 
 _SOURCE = Path(__file__).with_name("_csrc") / "bvh_traverse.cc"
@@ -63,8 +66,8 @@ _state: dict = {}
 
 def _compiler() -> str | None:
     for name in (os.environ.get("CXX"), "c++", "g++", "clang++"):
-        if name and shutil.which(name):
-            return shutil.which(name)
+        if name and (path := shutil.which(name)):
+            return path
     return None
 
 
@@ -157,16 +160,17 @@ def _load() -> bool:
 
 
 def native_status() -> tuple[bool, str]:
-    """Whether the native CPU BVH traversal is available, and why (or why not).
+    """Whether the native CPU ray-casting kernels are available, and why (or why not).
 
     Compiles and loads the kernel on the first call (a few seconds, once per machine: the
     library is cached; see the module docstring of `radiometria.render._native`).
 
     **Returns:**
 
-    `(available, reason)`: `available` is True when `intersect_closest` and `intersect_any`
-    run the native kernel on the CPU by default; `reason` says what happened (for example
-    `"no C++ compiler found ..."` or `"disabled by RADIOMETRIA_NATIVE=0"`).
+    `(available, reason)`: `available` is True when `intersect_closest`, `intersect_any` and
+    the two brute-force queries run the native kernels on the CPU by default; `reason` says
+    what happened (for example `"no C++ compiler found ..."` or
+    `"disabled by RADIOMETRIA_NATIVE=0"`).
 
     !!! note "Thesis"
         Ch. 8 (ray casting); the traversal of `Pharr2023` §7.3.5 and the tests of `Woop2013`
@@ -178,14 +182,13 @@ def native_status() -> tuple[bool, str]:
 
 def resolve_backend(backend: str) -> str:
     """`"auto"` -> `"native"` on a CPU default backend when the kernel loads, else `"jax"`."""
+    check_choice(backend, "backend", ("auto", "native", "jax"))
     if backend == "jax":
         return "jax"
     if backend == "native":
         if not _load():
             raise RuntimeError(f"the native BVH traversal is unavailable: {_state['reason']}.")
         return "native"
-    if backend != "auto":
-        raise ValueError(f"`backend` must be 'auto', 'native' or 'jax', got {backend!r}.")
     return "native" if jax.default_backend() == "cpu" and _load() else "jax"
 
 

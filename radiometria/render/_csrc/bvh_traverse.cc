@@ -336,7 +336,7 @@ struct Block {
   alignas(64) T ox[kSlots], oy[kSlots], oz[kSlots], sx[kSlots], sy[kSlots], sz[kSlots];
   alignas(64) T tlo[kSlots], tbest[kSlots];
   alignas(64) int32_t best[kSlots];
-  int64_t ray[kSlots];  // the ray of each slot, -1 for padding
+  int32_t ray[kSlots];  // the ray of each slot (index in the block), -1 for padding
 };
 
 // One triangle against the slots [begin, end) of a block, whose rays all have the axis KZ (so
@@ -376,16 +376,15 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
                  int64_t end) {
   const T *o = io.o, *d = io.d, *lo = io.lo, *hi = io.hi;
   Block<T> b;
+  Ray<T> rays[kBlock];
   for (int64_t base = begin; base < end; base += kBlock) {
     const int m = static_cast<int>(std::min<int64_t>(kBlock, end - base));
-    // group the block's rays by kz: slots [0, e0) kz = 0, [e0, e1) kz = 1, [e1, m) kz = 2
+    // group the block's rays by kz: slots [0, e0) kz = 0, [e0, e1) kz = 1, [e1, e2) kz = 2
     int count[3] = {0, 0, 0};
-    int axis[kBlock];
     for (int i = 0; i < m; ++i) {
-      const T* dd = d + 3 * (base + i);
-      const T ax = std::fabs(dd[0]), ay = std::fabs(dd[1]), az = std::fabs(dd[2]);
-      axis[i] = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-      ++count[axis[i]];
+      const int64_t g = base + i;
+      rays[i] = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
+      ++count[rays[i].kz];
     }
     auto padded = [](int c) { return (c + kLanes - 1) / kLanes * kLanes; };
     const int e0 = padded(count[0]), e1 = e0 + padded(count[1]), e2 = e1 + padded(count[2]);
@@ -398,14 +397,12 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
     }
     int next[3] = {0, e0, e1};
     for (int i = 0; i < m; ++i) {
-      const int64_t g = base + i;
-      const Ray<T> r = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
-      const int s = next[axis[i]]++;
+      const Ray<T>& r = rays[i];
+      const int s = next[r.kz]++;
       b.ox[s] = r.ox, b.oy[s] = r.oy, b.oz[s] = r.oz;
       b.sx[s] = r.sx, b.sy[s] = r.sy, b.sz[s] = r.sz;
       b.tlo[s] = r.t_lo, b.tbest[s] = r.t_hi;
-      b.best[s] = -1;
-      b.ray[s] = g;
+      b.ray[s] = i;
     }
     for (int64_t k = 0; k < f; ++k) {
       T q[9];
@@ -416,14 +413,14 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
       brute_class<T, kAny, 2>(q, kk, b, e1, e2);
     }
     for (int s = 0; s < e2; ++s) {
-      const int64_t g = b.ray[s];
-      if (g < 0) continue;
+      if (b.ray[s] < 0) continue;
+      const Ray<T>& r = rays[b.ray[s]];
+      const int64_t g = base + b.ray[s];
       const int32_t p = b.best[s];
       io.prim[g] = p;
       io.t[g] = (p >= 0 && !kAny) ? b.tbest[s] : std::numeric_limits<T>::infinity();
       T b1 = 0, b2 = 0;
       if (p >= 0 && !kAny) {
-        const Ray<T> r = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
         barycentrics(r, tri + 9 * static_cast<int64_t>(p), b1, b2);
       }
       io.b1[g] = b1;
