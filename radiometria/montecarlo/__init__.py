@@ -21,15 +21,12 @@ from ._distributions import (
     sample_discrete as sample_discrete,
 )
 from ._estimators import (
-    ConvergenceStudy as ConvergenceStudy,
     Estimate as Estimate,
     antithetic as antithetic,
     control_variate as control_variate,
-    convergence_study as convergence_study,
     estimate_mean as estimate_mean,
     filter_importance_sampling as filter_importance_sampling,
     importance_sampling as importance_sampling,
-    integrate as integrate,
     mis_estimate as mis_estimate,
     one_sample_mis as one_sample_mis,
     roulette_and_split as roulette_and_split,
@@ -43,6 +40,11 @@ from ._heuristics import (
     balance_heuristic as balance_heuristic,
     mis_weights as mis_weights,
     power_heuristic as power_heuristic,
+)
+from ._integrate import (
+    ConvergenceStudy as ConvergenceStudy,
+    convergence_study as convergence_study,
+    integrate as integrate,
 )
 from ._samplers import (
     independent as independent,

@@ -15,15 +15,10 @@
 
 from ._data import get_lut as get_lut
 from ._fit import FitResult as FitResult, fit_rgb as fit_rgb
+from ._fit_lut import RESULTS as RESULTS, LUTFitResult as LUTFitResult, fit_lut as fit_lut
 from ._forward import ForwardModel as ForwardModel, forward_model as forward_model
 from ._io import LUTFileError as LUTFileError, load_lut as load_lut, save_lut as save_lut
-from ._lut import (
-    RESULTS as RESULTS,
-    LUTFitResult as LUTFitResult,
-    RGBToSpectrumLUT as RGBToSpectrumLUT,
-    brightness_scale as brightness_scale,
-    fit_lut as fit_lut,
-)
+from ._lut import RGBToSpectrumLUT as RGBToSpectrumLUT, brightness_scale as brightness_scale
 from ._roundtrip import (
     roundtrip_delta_E as roundtrip_delta_E,
     roundtrip_grid_rgb as roundtrip_grid_rgb,

@@ -43,8 +43,8 @@ def lut_build(args: argparse.Namespace) -> int:
     _use_all_cpu_cores()
     import jax
 
+    from ._fit_lut import fit_lut
     from ._io import save_lut
-    from ._lut import fit_lut
 
     devices = jax.devices() if len(jax.devices()) > 1 else None
     bar = tqdm(total=3 * res * res, desc=f"lut {space} res {res}", unit="col", file=sys.stderr)

@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ._fit_lut import fit_lut
 from ._io import encode_planes as encode_planes, load_lut
-from ._lut import RGBToSpectrumLUT, fit_lut
+from ._lut import RGBToSpectrumLUT
 
 DATA_DIR = Path(__file__).parent / "data"
 SRGB_FILE = DATA_DIR / "srgb_64.npz"

@@ -18,8 +18,8 @@ def build_data(out=None, *, resolution: int = 64) -> dict:
 
     from .. import __version__
     from ._data import SRGB_FILE, encode_planes
+    from ._fit_lut import fit_lut
     from ._io import _atomic_write, checksum
-    from ._lut import fit_lut
     from ._roundtrip import (
         roundtrip_delta_E,
         roundtrip_grid_rgb,
