@@ -6,9 +6,7 @@ path that cannot be written raises the usual `OSError` subclass with the path in
 IO is NumPy-side: arrays in, NumPy arrays out.
 """
 
-import os
 import struct
-import tempfile
 import zlib
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -16,6 +14,7 @@ from pathlib import Path
 import jax.numpy as jnp
 import numpy as np
 
+from .._io import atomic_write_path
 from ..colorimetry import srgb_eotf_inverse
 
 # Attributes every OpenEXR header has; user metadata may not use these names.
@@ -31,28 +30,19 @@ EMISSIVE_UNITS = "W.m^-2.sr^-1"
 
 
 def _atomic_write(path, write: Callable[[str], None]) -> Path:
-    """Call `write(tmp)` on a temporary file next to `path`, then rename it onto `path`."""
+    """`atomic_write_path` with the image file named in every error.
+
+    OpenEXR reports IO failures as `RuntimeError`; they become `OSError` too.
+    """
     path = Path(path)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        return atomic_write_path(path, write)
     except OSError as e:
         raise type(e)(
             e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)
         ) from e
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException as e:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(e, OSError):
-            raise type(e)(
-                e.errno, f"Cannot write image file {str(path)!r}: {e.strerror}", str(path)
-            ) from e
-        if isinstance(e, RuntimeError):  # OpenEXR reports IO failures as RuntimeError
-            raise OSError(f"Cannot write image file {str(path)!r}: {e}") from e
-        raise
-    return path
+    except RuntimeError as e:
+        raise OSError(f"Cannot write image file {str(path)!r}: {e}") from e
 
 
 def _image(rgb, name: str, channels: int | None = 3) -> np.ndarray:

@@ -12,14 +12,12 @@ checks that the packaged values equal colour-science's.
 
 import datetime
 import hashlib
-import io
 import json
-import os
-import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np
+
+from .._io import atomic_write_bytes, write_npz_deterministic
 
 DATA_DIR = Path(__file__).parent / "data"
 
@@ -96,28 +94,6 @@ def _key(name: str) -> str:
     return {**XYZ_CMFS, **RGB_CMFS}.get(name, name)
 
 
-def _write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Write an uncompressed .npz deterministically and atomically (fixed timestamps, sorted)."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".npz", dir=path.parent)
-    os.close(fd)
-    try:
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-            for name in sorted(arrays):
-                buf = io.BytesIO()
-                np.lib.format.write_array(
-                    buf, np.ascontiguousarray(arrays[name]), allow_pickle=False
-                )
-                info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-                info.compress_type = zipfile.ZIP_DEFLATED
-                info.external_attr = 0o644 << 16
-                zf.writestr(info, buf.getvalue())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def colour_tables() -> dict[str, dict[str, np.ndarray]]:
     """The tables as colour-science ships them: {file: {key: float64 array}}."""
     import colour
@@ -162,14 +138,10 @@ def build_data(out_dir: Path | str = DATA_DIR) -> dict:
         "files": {},
     }
     for fname, meta in FILES.items():
-        _write_npz(out_dir / fname, tables[fname])
+        write_npz_deterministic(out_dir / fname, tables[fname], mode=0o644)
         provenance["files"][fname] = {**meta, "sha256": sha256(out_dir / fname)}
-    fd, tmp = tempfile.mkstemp(prefix=".provenance-", suffix=".json", dir=out_dir)
-    with os.fdopen(fd, "w") as fh:
-        json.dump(provenance, fh, indent=2)
-        fh.write("\n")
-    os.chmod(tmp, 0o644)
-    os.replace(tmp, out_dir / "provenance.json")
+    text = json.dumps(provenance, indent=2) + "\n"
+    atomic_write_bytes(out_dir / "provenance.json", text.encode(), mode=0o644)
     return provenance
 
 

@@ -1,9 +1,9 @@
 """Registry of thesis figures: each figure is a function `fn(out_dir, *, smoke) -> list[Path]`."""
 
-import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
+
+from .._io import atomic_write_path
 
 FigureFn = Callable[..., list[Path]]
 FIGURES: dict[str, FigureFn] = {}
@@ -21,17 +21,6 @@ def figure(name: str) -> Callable[[FigureFn], FigureFn]:
     return register
 
 
-def _atomic_savefig(fig, path: Path, **kwargs) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, **kwargs)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def save(fig, out_dir: Path | str, stem: str, *, dpi: int = 150) -> list[Path]:
     """Write a matplotlib figure as `stem.png` and `stem.pdf` atomically; close it; return paths."""
     import matplotlib.pyplot as plt
@@ -41,7 +30,7 @@ def save(fig, out_dir: Path | str, stem: str, *, dpi: int = 150) -> list[Path]:
     paths = []
     for ext in ("png", "pdf"):
         path = out_dir / f"{stem}.{ext}"
-        _atomic_savefig(fig, path, dpi=dpi, bbox_inches="tight")
+        atomic_write_path(path, lambda tmp: fig.savefig(tmp, dpi=dpi, bbox_inches="tight"))
         paths.append(path)
     plt.close(fig)
     return paths

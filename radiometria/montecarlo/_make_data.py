@@ -23,14 +23,12 @@ Run `python -m radiometria.montecarlo._make_data` (SciPy installed) to rebuild;
 
 import datetime
 import hashlib
-import io
 import json
-import os
-import tempfile
-import zipfile
 from pathlib import Path
 
 import numpy as np
+
+from .._io import atomic_write_bytes, write_npz_deterministic
 
 DATA_DIR = Path(__file__).parent / "data"
 SOBOL_FILE = "sobol_joe_kuo_6_21201.npz"
@@ -96,28 +94,6 @@ def compact_from_scipy(poly: np.ndarray, vinit: np.ndarray) -> dict[str, np.ndar
     }
 
 
-def _write_npz(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Deterministic compressed .npz (fixed timestamps, sorted keys), written atomically."""
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for name in sorted(arrays):
-            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = zipfile.ZIP_DEFLATED
-            arr_buf = io.BytesIO()
-            np.lib.format.write_array(
-                arr_buf, np.ascontiguousarray(arrays[name]), allow_pickle=False
-            )
-            zf.writestr(info, arr_buf.getvalue())
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}-")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(buf.getvalue())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def build(out_dir: Path = DATA_DIR) -> Path:
     """Write the compact table and `provenance.json` into `out_dir`; return the table's path."""
     import scipy
@@ -126,9 +102,7 @@ def build(out_dir: Path = DATA_DIR) -> Path:
     with np.load(src) as z:
         compact = compact_from_scipy(z["poly"], z["vinit"])
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / SOBOL_FILE
-    _write_npz(path, compact)
-    os.chmod(path, 0o644)
+    path = write_npz_deterministic(out_dir / SOBOL_FILE, compact, mode=0o644)
     prov = {
         SOBOL_FILE: {
             "content": "Sobol direction numbers new-joe-kuo-6.21201 (21201 dimensions), compact "
@@ -148,9 +122,8 @@ def build(out_dir: Path = DATA_DIR) -> Path:
             "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
         }
     }
-    tmp = out_dir / ".provenance.json.tmp"
-    tmp.write_text(json.dumps(prov, indent=2, sort_keys=True) + "\n")
-    os.replace(tmp, out_dir / "provenance.json")
+    text = json.dumps(prov, indent=2, sort_keys=True) + "\n"
+    atomic_write_bytes(out_dir / "provenance.json", text.encode(), mode=0o644)
     return path
 
 

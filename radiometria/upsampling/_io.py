@@ -39,14 +39,16 @@ the problem when something is wrong.
 """
 
 import hashlib
+import importlib.metadata
 import json
-import os
 import struct
-import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from .._io import atomic_write
+from ..colorimetry import RGB_COLOURSPACES
 from ._forward import forward_model
 from ._lut import RGBToSpectrumLUT
 
@@ -71,31 +73,6 @@ def checksum(scale: np.ndarray, coeffs: np.ndarray) -> str:
         a = np.ascontiguousarray(a)
         h.update(a.astype(a.dtype.newbyteorder("<"), copy=False).tobytes())
     return h.hexdigest()
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
-def _atomic_write(path: Path, write) -> None:
-    path = Path(path)
-    if not path.parent.exists():
-        raise FileNotFoundError(
-            f"cannot write {str(path)!r}: directory {str(path.parent)!r} does not exist"
-        )
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}-", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; give the usual permissions
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _arrays(lut: RGBToSpectrumLUT) -> tuple[np.ndarray, np.ndarray]:
@@ -133,8 +110,6 @@ def save_lut(lut: RGBToSpectrumLUT, path, *, fit_settings: dict | None = None) -
     if not (np.all(np.isfinite(scale)) and np.all(np.isfinite(coeffs))):
         raise ValueError(f"Refusing to write {str(path)!r}: the table has non-finite values.")
     if suffix == ".npz":
-        from .. import __version__
-
         meta = {
             "format": FORMAT_NAME,
             "version": FORMAT_VERSION,
@@ -146,7 +121,7 @@ def save_lut(lut: RGBToSpectrumLUT, path, *, fit_settings: dict | None = None) -
             "over the largest, times (res - 1) (pbrt-v4 RGBToSpectrumTable)",
             "sha256": checksum(scale, coeffs),
             "fit": fit_settings or {},
-            "created_by": f"radiometria {__version__}",
+            "created_by": f"radiometria {importlib.metadata.version('radiometria')}",
         }
 
         def write(f):
@@ -164,7 +139,7 @@ def save_lut(lut: RGBToSpectrumLUT, path, *, fit_settings: dict | None = None) -
             f.write(coeffs.astype("<f4").tobytes())
             f.write(block)
 
-    _atomic_write(path, write)
+    atomic_write(path, write)
     return path
 
 
@@ -263,8 +238,6 @@ def decode_planes(planes: np.ndarray, shape) -> np.ndarray:
 
 
 def _load_npz(path: Path):
-    import zipfile
-
     try:
         with np.load(path, allow_pickle=False) as f:
             files = set(f.files)
@@ -357,8 +330,6 @@ def _load_coeff(path: Path):
 
 
 def _colourspace_from_matrix(m: np.ndarray) -> str:
-    from ..colorimetry import RGB_COLOURSPACES
-
     best, err = "sRGB", np.inf
     for name, cs in RGB_COLOURSPACES.items():
         e = float(np.abs(np.asarray(cs.matrix_RGB_to_XYZ) - m).max())
