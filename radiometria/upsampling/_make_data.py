@@ -6,27 +6,27 @@ the byte-plane layout described in `_data.py`, with the fit settings, the residu
 distribution of the table points and the round-trip statistics in its metadata.
 """
 
+import importlib.metadata
 import json
 import sys
 
+import jax
 import numpy as np
+
+from .._io import atomic_write
+from ._data import SRGB_FILE, encode_planes
+from ._fit_lut import fit_lut
+from ._io import checksum
+from ._roundtrip import (
+    roundtrip_delta_E,
+    roundtrip_grid_rgb,
+    roundtrip_random_rgb,
+    roundtrip_statistics,
+)
 
 
 def build_data(out=None, *, resolution: int = 64) -> dict:
     """Fit, measure and write the packaged table; return its metadata."""
-    import jax
-
-    from .. import __version__
-    from ._data import SRGB_FILE, encode_planes
-    from ._fit_lut import fit_lut
-    from ._io import _atomic_write, checksum
-    from ._roundtrip import (
-        roundtrip_delta_E,
-        roundtrip_grid_rgb,
-        roundtrip_random_rgb,
-        roundtrip_statistics,
-    )
-
     out = SRGB_FILE if out is None else out
     fit = fit_lut("sRGB", resolution)
     scale = np.asarray(fit.lut.scale, np.float32)
@@ -47,7 +47,7 @@ def build_data(out=None, *, resolution: int = 64) -> dict:
         "fit_summary": fit.summary(),
         "roundtrip_grid33_encoded": roundtrip_statistics(de_grid, grid),
         "roundtrip_random_1e5_linear": roundtrip_statistics(de_rnd, rnd),
-        "created_by": f"radiometria {__version__}",
+        "created_by": f"radiometria {importlib.metadata.version('radiometria')}",
     }
 
     def write(f):
@@ -56,7 +56,7 @@ def build_data(out=None, *, resolution: int = 64) -> dict:
             f, scale=scale, coeffs_planes=planes, metadata=np.asarray(json.dumps(meta))
         )
 
-    _atomic_write(out, write)
+    atomic_write(out, write)
     return meta
 
 
