@@ -19,8 +19,12 @@ __all__ = ["main"]
 
 
 def _figures(args: argparse.Namespace) -> int:
+    import matplotlib
     from tqdm import tqdm
 
+    # Figures go to files, never to a screen: a non-interactive backend, chosen by the program
+    # (importing `radiometria.figures` leaves the backend to the user).
+    matplotlib.use("Agg")
     from .figures import FIGURES, make_figures
 
     names = args.only or sorted(FIGURES)

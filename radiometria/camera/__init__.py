@@ -29,7 +29,6 @@ from ._film import (
     film_develop as film_develop,
     film_merge as film_merge,
     film_samples_to_XYZ as film_samples_to_XYZ,
-    film_to_rgb as film_to_rgb,
     splat_samples as splat_samples,
 )
 from ._filters import (

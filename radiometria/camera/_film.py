@@ -422,20 +422,3 @@ def film_develop(film: Film, colourspace="sRGB") -> Float[Array, "H W 3"]:
         return xyz
     m = _xyz_to_rgb_matrix(colourspace, xyz.dtype)
     return jnp.einsum("ij,...j->...i", m, xyz)
-
-
-def film_to_rgb(film: Film, colourspace="sRGB") -> Float[Array, "H W 3"]:
-    """Same as `film_develop` (the name agreed in the project's API notes).
-
-    **Arguments:**
-
-    - `film`: the `Film`; `colourspace`: as in `film_develop`. [radiance-like]
-
-    **Returns:**
-
-    Linear RGB (H, W, 3).
-
-    !!! note "Thesis"
-        Eq. 2.35.
-    """
-    return film_develop(film, colourspace)

@@ -89,11 +89,6 @@ FILES = {
 }
 
 
-def _key(name: str) -> str:
-    """Array key inside an .npz: ASCII, no spaces (e.g. 'CIE 1931 2 Degree...' -> 'cie_1931_2')."""
-    return {**XYZ_CMFS, **RGB_CMFS}.get(name, name)
-
-
 def colour_tables() -> dict[str, dict[str, np.ndarray]]:
     """The tables as colour-science ships them: {file: {key: float64 array}}."""
     import colour

@@ -2,15 +2,13 @@
 
 One private module per chapter registers its figures in `FIGURES`; `make_figures` writes them.
 Figures are PNG and PDF, made with a fixed seed; `smoke=True` shrinks sample counts for CI.
+Importing this package leaves matplotlib's backend alone; the `radiometria figures` command
+selects the non-interactive Agg backend itself, and headless sessions fall back to Agg anyway.
 """
 
 from pathlib import Path
 
-import matplotlib
-
-matplotlib.use("Agg")
-
-from . import (  # noqa: E402  (the backend must be chosen first)
+from . import (
     _camera,
     _colorimetry,
     _montecarlo,
@@ -20,7 +18,7 @@ from . import (  # noqa: E402  (the backend must be chosen first)
     _scattering,
     _upsampling,
 )
-from ._registry import FIGURES as FIGURES, figure as figure, save as save  # noqa: E402
+from ._registry import FIGURES as FIGURES, figure as figure, save as save
 
 del _camera, _colorimetry, _montecarlo, _photometry, _radiometry, _render, _scattering, _upsampling
 
