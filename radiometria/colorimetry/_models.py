@@ -6,6 +6,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from .._math import safe_sqrt
 from ._fastmath import cbrt_positive
 
 # CIE 1976 constants, exact rationals (CIE 015:2018 eq. 8.3-8.5): epsilon = (6/29)^3.
@@ -99,9 +100,7 @@ def Lab_to_XYZ(Lab: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array
 
 def _safe_norm2(a: Array, b: Array) -> Array:
     """sqrt(a^2 + b^2) with a zero (not NaN) gradient at the origin; NaN propagates."""
-    r2 = a * a + b * b
-    zero = r2 <= 0
-    return jnp.where(zero, 0.0, jnp.sqrt(jnp.where(zero, 1.0, r2)))
+    return safe_sqrt(a * a + b * b, propagate_nan=True)
 
 
 def _hue_degrees(b: Array, a: Array) -> Array:

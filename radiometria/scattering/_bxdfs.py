@@ -57,6 +57,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
+from .._math import safe_div
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
 from ._fresnel import _check_eta, _check_k, _fr_conductor, _fr_dielectric_snell
 from ._microfacet import (
@@ -130,12 +131,6 @@ def _u2(u2) -> Array:
     return u2
 
 
-def _safe_div(a: Array, b: Array) -> Array:
-    """a / b, and 0 where b == 0 (finite gradients)."""
-    ok = b != 0
-    return jnp.where(ok, a / jnp.where(ok, b, 1.0), 0.0)
-
-
 def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array]:
     """Malley's method on the concentric disk mapping (pbrt-v4 A.5.3); returns x, y, z >= 0."""
     x, y = _sample_disk_concentric(u0, u1)
@@ -192,7 +187,7 @@ class BSDFSample(eqx.Module):
 
     def weight(self) -> Array:
         """Monte Carlo weight `f |cos theta_i| / pdf`, `(..., n_lambda)`; 0 for a failed sample."""
-        return _safe_div(self.f * jnp.abs(self.wi[..., 2:3]), self.pdf[..., None])
+        return safe_div(self.f * jnp.abs(self.wi[..., 2:3]), self.pdf[..., None])
 
 
 def _failed_or(ok: Array, s: BSDFSample, *, masked: bool = False) -> BSDFSample:
@@ -361,10 +356,10 @@ class OrenNayarBxDF(AbstractBxDF):
             B = 0.45 * s2 / (s2 + 0.09)
             # sin(alpha) tan(beta) = sin_a sin_b / cos_b, beta the angle nearer the normal
             # (larger |cos|); times cos(dphi) the sines combine into the dot product.
-            g = A + B * _safe_div(jnp.maximum(0.0, dxy), cos_b)
+            g = A + B * safe_div(jnp.maximum(0.0, dxy), cos_b)
         else:
             t = jnp.where(dxy > 0, cos_b, 1.0)
-            g = (1.0 + sigma * _safe_div(dxy, t)) / (1.0 + (0.5 - 2.0 / (3.0 * np.pi)) * sigma)
+            g = (1.0 + sigma * safe_div(dxy, t)) / (1.0 + (0.5 - 2.0 / (3.0 * np.pi)) * sigma)
         same = wo[..., 2] * wi[..., 2] > 0
         g = jnp.where(same, g, 0.0) * (1.0 / jnp.pi)
         return g[..., None] * r
@@ -464,7 +459,7 @@ class ConductorBxDF(AbstractBxDF):
         F = _fr_conductor(c[..., None], eta, k)
         ok = c > 0
         s = BSDFSample(
-            f=_safe_div(F, c[..., None]),
+            f=safe_div(F, c[..., None]),
             wi=wi,
             pdf=jnp.ones_like(c),
             is_delta=jnp.ones(c.shape, bool),

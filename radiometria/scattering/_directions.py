@@ -24,6 +24,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from .._checks import as_float_array, check_last_axis
+from .._math import align_ranks, dot, safe_sqrt
 
 __all__ = [
     "Frame",
@@ -55,31 +56,14 @@ __all__ = [
 # set to "raise").
 
 
-def _align(*arrays: Array) -> tuple[Array, ...]:
-    """Prepend singleton axes so every array has the same rank (then numpy rules broadcast)."""
-    nd = max(jnp.ndim(a) for a in arrays)
-    return tuple(jnp.reshape(a, (1,) * (nd - jnp.ndim(a)) + jnp.shape(a)) for a in arrays)
-
-
 def _bcast(*arrays: Array) -> tuple[Array, ...]:
     """Broadcast arrays to their common shape (after rank alignment)."""
-    return tuple(jnp.broadcast_arrays(*_align(*arrays)))
-
-
-def _dot(a: Array, b: Array) -> Array:
-    a, b = _align(a, b)
-    return jnp.sum(a * b, axis=-1)
-
-
-def _safe_sqrt(x: Array) -> Array:
-    """sqrt(max(x, 0)) with a finite gradient at 0 (the double-where trick, style.md section 8)."""
-    pos = x > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
+    return tuple(jnp.broadcast_arrays(*align_ranks(*arrays)))
 
 
 @jax.custom_jvp
 def _sqrt_clamped(x: Array) -> Array:
-    """sqrt(max(x, 0)) with the gradient of `_safe_sqrt` (0 where x <= 0), NaN propagating.
+    """sqrt(max(x, 0)) with the gradient of `safe_sqrt` (0 where x <= 0), NaN propagating.
 
     For the BxDFs' inner loop: the square root is the last operation here (the derivative rule
     carries the guard instead of a double `where`), so XLA's CPU backend materialises the
@@ -172,7 +156,7 @@ def reflect(wi, n) -> Array:
     """
     wi = _direction(wi, "wi")
     n = _direction(n, "n")
-    wi, n = _align(wi, n)
+    wi, n = align_ranks(wi, n)
     return 2.0 * jnp.sum(wi * n, axis=-1, keepdims=True) * n - wi
 
 
@@ -211,9 +195,9 @@ def refract(wi, n, eta) -> tuple[Array, Array]:
     wi = _direction(wi, "wi")
     n = _direction(n, "n")
     eta = as_float_array(eta, "eta")
-    wi, n = _align(wi, n)
+    wi, n = align_ranks(wi, n)
     cos_i = jnp.sum(wi * n, axis=-1)
-    cos_i, eta = _align(cos_i, eta)
+    cos_i, eta = align_ranks(cos_i, eta)
     # Flip the interface when wi is inside the object.
     inside = cos_i < 0
     eta_eff = jnp.where(inside, 1.0 / eta, eta)
@@ -222,15 +206,15 @@ def refract(wi, n, eta) -> tuple[Array, Array]:
     sin2_i = jnp.maximum(0.0, 1.0 - cos_i_eff * cos_i_eff)
     sin2_t = sin2_i / (eta_eff * eta_eff)
     valid = sin2_t < 1.0
-    cos_t = _safe_sqrt(jnp.where(valid, 1.0 - sin2_t, 1.0))
+    cos_t = safe_sqrt(jnp.where(valid, 1.0 - sin2_t, 1.0))
     sign = jnp.where(inside, -1.0, 1.0)
     # wt = -wi / eta + (cos_i / eta - cos_t) n, with n flipped when inside   (thesis eq. 3.12)
     coef = sign * (cos_i_eff / eta_eff - cos_t)
-    wi_b, inv_eta, coef_b = _align(wi, (1.0 / eta_eff)[..., None], coef[..., None])
-    n_b = _align(n, coef_b)[0]
+    wi_b, inv_eta, coef_b = align_ranks(wi, (1.0 / eta_eff)[..., None], coef[..., None])
+    n_b = align_ranks(n, coef_b)[0]
     wt = -wi_b * inv_eta + coef_b * n_b
     wr = 2.0 * cos_i[..., None] * n_b - wi_b
-    valid_b = _align(valid[..., None], wt)[0]
+    valid_b = align_ranks(valid[..., None], wt)[0]
     wt = jnp.where(valid_b, wt, wr)
     shape = jnp.broadcast_shapes(wt.shape[:-1], valid.shape)
     return jnp.broadcast_to(wt, shape + (3,)), jnp.broadcast_to(valid, shape)
@@ -250,7 +234,7 @@ def face_forward(n, v) -> Array:
     """
     n = _direction(n, "n")
     v = _direction(v, "v")
-    n, v = _align(n, v)
+    n, v = align_ranks(n, v)
     d = jnp.sum(n * v, axis=-1, keepdims=True)
     return jnp.where(d < 0, -n, n)
 
@@ -338,7 +322,7 @@ def to_local(frame, v) -> Array:
     """
     s, t, n = _frame_axes(frame)
     v = _direction(v, "v")
-    return jnp.stack([_dot(v, s), _dot(v, t), _dot(v, n)], axis=-1)
+    return jnp.stack([dot(v, s), dot(v, t), dot(v, n)], axis=-1)
 
 
 def to_world(frame, v) -> Array:
@@ -358,7 +342,7 @@ def to_world(frame, v) -> Array:
     """
     s, t, n = _frame_axes(frame)
     v = _direction(v, "v")
-    vx, vy, vz, s, t, n = _align(v[..., 0:1], v[..., 1:2], v[..., 2:3], s, t, n)
+    vx, vy, vz, s, t, n = align_ranks(v[..., 0:1], v[..., 1:2], v[..., 2:3], s, t, n)
     return vx * s + vy * t + vz * n
 
 
@@ -404,7 +388,7 @@ def sin_theta(w) -> Array:
 
     `Pharr2023` section 3.8.3 (local shading frame, thesis section 3.1.1).
     """
-    return _safe_sqrt(sin2_theta(w))
+    return safe_sqrt(sin2_theta(w))
 
 
 def tan_theta(w) -> Array:
@@ -494,5 +478,5 @@ def same_hemisphere(w, wp) -> Array:
     """
     w = _direction(w, "w")
     wp = _direction(wp, "wp")
-    a, b = _align(w[..., 2], wp[..., 2])
+    a, b = align_ranks(w[..., 2], wp[..., 2])
     return a * b > 0

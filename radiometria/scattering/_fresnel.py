@@ -20,7 +20,8 @@ import jax.numpy as jnp
 from jax import Array
 
 from .._checks import as_float_array, check_broadcastable, check_positive
-from ._directions import _align, _bcast, _safe_sqrt, _sqrt_clamped
+from .._math import align_ranks, safe_sqrt
+from ._directions import _bcast, _sqrt_clamped
 
 __all__ = [
     "fresnel_complex",
@@ -58,7 +59,7 @@ def _dielectric_cosines(cos_i: Array, eta: Array):
     # Snell's law: sin^2(theta_t) = sin^2(theta_i) / eta^2   (thesis eq. 3.7, 3.10)
     sin2_t = (1.0 - cos_i * cos_i) / (eta * eta)
     tir = sin2_t >= 1.0
-    cos_t = _safe_sqrt(jnp.where(tir, 0.0, 1.0 - sin2_t))
+    cos_t = safe_sqrt(jnp.where(tir, 0.0, 1.0 - sin2_t))
     return cos_i, eta, cos_t, tir
 
 
@@ -122,7 +123,7 @@ def _inputs(cos_theta_i, eta) -> tuple[Array, Array]:
     cos_i = as_float_array(cos_theta_i, "cos_theta_i")
     eta = _check_eta(eta)
     check_broadcastable(("cos_theta_i", cos_i), ("eta", eta))
-    return _align(cos_i, eta)
+    return align_ranks(cos_i, eta)
 
 
 def fresnel_dielectric_amplitudes(cos_theta_i, eta) -> tuple[Array, Array, Array, Array]:
@@ -297,7 +298,7 @@ def fresnel_conductor_polarized(cos_theta_i, eta, k) -> tuple[Array, Array]:
     eta = _check_eta(eta)
     k = _check_k(k)
     check_broadcastable(("cos_theta_i", mu), ("eta", eta), ("k", k))
-    return _fr_conductor_polarized(*_align(mu, eta, k))
+    return _fr_conductor_polarized(*align_ranks(mu, eta, k))
 
 
 def _conductor_terms(mu: Array, eta: Array, k: Array):
@@ -473,7 +474,7 @@ def fresnel_schlick(cos_theta_i, f0) -> Array:
     mu = jnp.abs(jnp.clip(as_float_array(cos_theta_i, "cos_theta_i"), -1.0, 1.0))
     f0 = as_float_array(f0, "f0")
     check_broadcastable(("cos_theta_i", mu), ("f0", f0))
-    mu, f0 = _align(mu, f0)
+    mu, f0 = align_ranks(mu, f0)
     m = 1.0 - mu
     m2 = m * m
     return f0 + (1.0 - f0) * (m2 * m2 * m)

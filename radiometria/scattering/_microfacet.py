@@ -14,7 +14,8 @@ import jax.numpy as jnp
 from jax import Array
 
 from .._checks import as_float_array
-from ._directions import _align, _inv_norm, _safe_sqrt, _sqrt_clamped, _stack3
+from .._math import align_ranks, safe_sqrt
+from ._directions import _inv_norm, _sqrt_clamped, _stack3
 from ._warps import _sample_disk_concentric
 
 __all__ = ["TrowbridgeReitzDistribution", "roughness_to_alpha"]
@@ -37,7 +38,7 @@ def roughness_to_alpha(roughness) -> Array:
     """
     r = as_float_array(roughness, "roughness")
     r = eqx.error_if(r, (r < 0) | (r > 1), "`roughness` must lie in [0, 1]; got a value outside.")
-    return _safe_sqrt(r)
+    return safe_sqrt(r)
 
 
 def _check_alpha(alpha, name: str) -> Array:
@@ -132,7 +133,7 @@ class TrowbridgeReitzDistribution(eqx.Module):
         self.alpha_y = jnp.maximum(ay, ALPHA_MIN)
 
     def _axy(self, w: Array) -> tuple[Array, Array, Array, Array, Array]:
-        x, y, z, ax, ay = _align(w[..., 0], w[..., 1], w[..., 2], self.alpha_x, self.alpha_y)
+        x, y, z, ax, ay = align_ranks(w[..., 0], w[..., 1], w[..., 2], self.alpha_x, self.alpha_y)
         return x, y, z, ax, ay
 
     def D(self, wm) -> Array:
@@ -171,14 +172,14 @@ class TrowbridgeReitzDistribution(eqx.Module):
         """
         zo, ro = self._sq_slope_term(wo)
         zi, ri = self._sq_slope_term(wi)
-        zo, ro, zi, ri = _align(zo, ro, zi, ri)
+        zo, ro, zi, ri = align_ranks(zo, ro, zi, ri)
         den = zi * ro + zo * ri
         ok = den > 0
         return jnp.where(ok, 2.0 * zo * zi / jnp.where(ok, den, 1.0), 0.0)
 
     def G_separable(self, wo, wi) -> Array:
         """Separable Smith masking-shadowing $G_1(\\omega_o)G_1(\\omega_i)$ (Mitsuba 3)."""
-        a, b = _align(self.G1(wo), self.G1(wi))
+        a, b = align_ranks(self.G1(wo), self.G1(wi))
         return a * b
 
     def D_visible(self, w, wm) -> Array:
@@ -186,7 +187,7 @@ class TrowbridgeReitzDistribution(eqx.Module):
         D(\omega_m)\,|\omega\cdot\omega_m|$ (`Heitz2018`). [sr^-1]"""
         w = as_float_array(w, "w")
         wm = as_float_array(wm, "wm")
-        w, wm = _align(w, wm)
+        w, wm = align_ranks(w, wm)
         x, y, z, ax, ay = self._axy(w)
         mx, my, mz = wm[..., 0], wm[..., 1], wm[..., 2]
         # G1(w) / |cos theta| = 2 / (|z| + r), finite where z != 0.
@@ -219,5 +220,5 @@ class TrowbridgeReitzDistribution(eqx.Module):
         w = as_float_array(w, "w")
         u = as_float_array(u, "u")
         x, y, z, ax, ay = self._axy(w)
-        x, y, z, ax, ay, u0, u1 = _align(x, y, z, ax, ay, u[..., 0], u[..., 1])
+        x, y, z, ax, ay, u0, u1 = align_ranks(x, y, z, ax, ay, u[..., 0], u[..., 1])
         return _stack3(*_sample_wm_xyz(x, y, z, ax, ay, u0, u1))
