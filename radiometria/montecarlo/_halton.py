@@ -27,13 +27,12 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from .._bits import mix32, permutation_element
 from .._checks import check_positive_int
 from .._types import Float, Key
-from ._samplers import (
-    _check_sequence_options,
-    _lowbias32 as _mix32,  # pbrt's MixBits, 32-bit
-)
+from ._samplers import _check_sequence_options
 
+_mix32 = mix32  # render/_samplers.py imports it from here
 SCRAMBLES = (None, "none", "permutation", "owen")
 
 
@@ -49,52 +48,6 @@ def first_primes(d: int) -> np.ndarray:
         if sieve[p]:
             sieve[p * p :: p] = False
     return np.flatnonzero(sieve)[:d].astype(np.int64)
-
-
-def permutation_element(i: Array, n: Array, seed: Array) -> Array:
-    """Element `i` of a pseudo-random permutation of {0..n-1} chosen by `seed` (`Kensler2013`).
-
-    uint32 in and out, broadcast; a hashed bijection of the next power of two, cycle-walked until
-    it lands below `n` (vectorised with `lax.while_loop`).
-    """
-    i, n, seed = jnp.broadcast_arrays(i, n, seed)
-    w = n - np.uint32(1)
-    for s in (1, 2, 4, 8, 16):
-        w = w | (w >> np.uint32(s))
-    p = seed
-
-    def hash_once(i):
-        i = i ^ p
-        i = i * np.uint32(0xE170893D)
-        i = i ^ (p >> np.uint32(16))
-        i = i ^ ((i & w) >> np.uint32(4))
-        i = i ^ (p >> np.uint32(8))
-        i = i * np.uint32(0x0929EB3F)
-        i = i ^ (p >> np.uint32(23))
-        i = i ^ ((i & w) >> np.uint32(1))
-        i = i * (np.uint32(1) | (p >> np.uint32(27)))
-        i = i * np.uint32(0x6935FA69)
-        i = i ^ ((i & w) >> np.uint32(11))
-        i = i * np.uint32(0x74DCB303)
-        i = i ^ ((i & w) >> np.uint32(2))
-        i = i * np.uint32(0x9E501CC3)
-        i = i ^ ((i & w) >> np.uint32(2))
-        i = i * np.uint32(0xC860A3DF)
-        i = i & w
-        return i ^ (i >> np.uint32(5))
-
-    def cond(state):
-        _, active = state
-        return jnp.any(active)
-
-    def body(state):
-        cur, active = state
-        nxt = hash_once(cur)
-        return jnp.where(active, nxt, cur), active & (nxt >= n)
-
-    first = hash_once(i)
-    out, _ = jax.lax.while_loop(cond, body, (first, first >= n))
-    return (out + p) % n
 
 
 def _digits_for_precision(bases: np.ndarray, dtype) -> np.ndarray:
@@ -222,11 +175,11 @@ def _halton_owen(key: Key, n: int, d: int, skip: int, dtype) -> Array:
         q, prefix, out, scale = carry
         digit = q % bu
         salt = (k.astype(jnp.uint32) * np.uint32(0x9E3779B9)) ^ prefix
-        h = _mix32(seeds ^ _mix32(salt))
+        h = mix32(seeds ^ mix32(salt))
         permuted = permutation_element(digit, bu, h)
         out = out + jnp.where(k < nd, permuted.astype(dtype) * scale, 0.0)
         # The node of the next digit is identified by all digits below it (nested scrambling).
-        prefix = _mix32(prefix + digit + np.uint32(1))
+        prefix = mix32(prefix + digit + np.uint32(1))
         return q // bu, prefix, out, scale / bf
 
     init = (q0, jnp.zeros((n, d), jnp.uint32), jnp.zeros((n, d), dtype), 1.0 / bf)

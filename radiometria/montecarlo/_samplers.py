@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from .._bits import mix32, uint32_to_unit_float
 from .._checks import check_choice, check_positive_int
 from .._types import Float, Key
 
@@ -45,28 +46,17 @@ def _below_one(x: Array) -> Array:
     return jnp.minimum(x, 1.0 - jnp.finfo(x.dtype).epsneg)
 
 
-def _lowbias32(x: Array) -> Array:
-    """Wellons' `lowbias32` integer finaliser: a bijection of uint32 with strong avalanche."""
-    x = x ^ (x >> np.uint32(16))
-    x = x * np.uint32(0x7FEB352D)
-    x = x ^ (x >> np.uint32(15))
-    x = x * np.uint32(0x846CA68B)
-    return x ^ (x >> np.uint32(16))
-
-
 def hash_uniform(key: Key, n: int, d: int, dtype) -> Array:
     """Counter-based uniforms: two rounds of `lowbias32` over (row, column) with key-derived seeds.
 
     Every variate is an independent function of its index, so XLA fuses generation with the
     integrand and nothing is written to memory; far cheaper on CPU than threefry.
     """
-    from ._sobol import uint32_to_unit_float
-
     seeds = jax.random.bits(key, (2,), jnp.uint32)
     row = jnp.arange(n, dtype=jnp.uint32)[:, None]
     col = jnp.arange(d, dtype=jnp.uint32)[None, :]
-    h = _lowbias32(row ^ seeds[0])
-    h = _lowbias32(h ^ (col * np.uint32(0x9E3779B9) + seeds[1]))
+    h = mix32(row ^ seeds[0])
+    h = mix32(h ^ (col * np.uint32(0x9E3779B9) + seeds[1]))
     return uint32_to_unit_float(h, dtype)
 
 
@@ -214,8 +204,6 @@ def kronecker(
 
 @functools.partial(jax.jit, static_argnames=("n", "skip", "dtype"))
 def _kronecker(a_fix, key, n, skip, dtype):
-    from ._sobol import uint32_to_unit_float
-
     d = a_fix.shape[0]
     i = jnp.asarray(skip, jnp.uint32) + jnp.arange(n, dtype=jnp.uint32)
     x = i[:, None] * a_fix[None, :]  # wraps mod 2^32: the fractional part in fixed point

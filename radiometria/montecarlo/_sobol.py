@@ -29,6 +29,12 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from .._bits import (
+    laine_karras_permutation,
+    owen_scramble_32 as owen_scramble_32,  # render/_samplers.py imports it from here
+    reverse_bits_32,
+    uint32_to_unit_float,
+)
 from .._checks import check_positive_int
 from .._types import Float, Key
 from ._samplers import _check_sequence_options
@@ -85,43 +91,6 @@ def direction_numbers(d: int) -> np.ndarray:
     shifts = (BITS - 1 - np.arange(BITS)).astype(np.uint64)
     v = (m << shifts[None, :]) & np.uint64(0xFFFFFFFF)
     return v.astype(np.uint32)
-
-
-def reverse_bits_32(x: Array) -> Array:
-    """Reverse the 32 bits of uint32 values (five mask-and-shift swaps)."""
-    for shift, mask in ((1, 0x55555555), (2, 0x33333333), (4, 0x0F0F0F0F), (8, 0x00FF00FF)):
-        m = np.uint32(mask)
-        x = ((x >> np.uint32(shift)) & m) | ((x & m) << np.uint32(shift))
-    return (x >> np.uint32(16)) | (x << np.uint32(16))
-
-
-def laine_karras_permutation(x: Array, seed: Array) -> Array:
-    """Burley's improved Laine-Karras hash: a bijection of uint32 in which bit k depends only on
-    bits 0..k, so on bit-reversed values it is a nested (Owen) scramble (`Burley2020`)."""
-    x = x + seed
-    x = x ^ (x * np.uint32(0x6C50B47C))
-    x = x ^ (x * np.uint32(0xB82F1E52))
-    x = x ^ (x * np.uint32(0xC7AFE638))
-    x = x ^ (x * np.uint32(0x8D22F6E6))
-    return x
-
-
-def owen_scramble_32(x: Array, seed: Array) -> Array:
-    """Nested uniform scramble of 32-bit fixed-point values `x` with `seed` (broadcast)."""
-    return reverse_bits_32(laine_karras_permutation(reverse_bits_32(x), seed))
-
-
-def uint32_to_unit_float(x: Array, dtype) -> Array:
-    """uint32 fixed point -> float in [0, 1): all 32 bits in float64, the top 24 in float32.
-
-    Dropping the low bits in float32 keeps every value strictly below 1 (x * 2^-32 would round
-    the largest ones up to 1.0).
-    """
-    dtype = jnp.dtype(dtype)
-    if dtype == jnp.float64:
-        return x.astype(jnp.float64) * (2.0**-32)
-    mant = jnp.finfo(dtype).nmant + 1
-    return (x >> np.uint32(32 - mant)).astype(dtype) * (2.0**-mant)
 
 
 def _xor_table(w: Array, idx: Array, n_bits: int) -> Array:
