@@ -22,8 +22,10 @@ Conventions (Mitsuba 3's, which the reference scenes use):
   (Mitsuba's spectral film normalisation: a constant spectrum $L = 1$ gives $Y = 1$).
 """
 
+from ._base import AbstractCamera as AbstractCamera
 from ._film import (
     Film as Film,
+    SpectralResponse as SpectralResponse,
     film_add_samples as film_add_samples,
     film_add_XYZ as film_add_XYZ,
     film_develop as film_develop,

@@ -57,6 +57,51 @@ def _cmf_table(cmfs, observer: str) -> tuple[np.ndarray, np.ndarray]:
     return wl, values
 
 
+def _normalised_cmfs(cmfs, observer: str, dtype) -> tuple[Array, Array]:
+    """The CIE table and its values divided by $\int\bar y$, as arrays of `dtype`."""
+    if dtype is None:
+        dtype = jnp.zeros(()).dtype  # the default float (float64 under jax_enable_x64)
+    if not jnp.issubdtype(dtype, jnp.floating):
+        raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
+    wl, values = _cmf_table(cmfs, observer)
+    y_integral = np.trapezoid(values[:, 1], wl)
+    return jnp.asarray(wl, dtype), jnp.asarray(values / y_integral, dtype)
+
+
+class SpectralResponse(eqx.Module):
+    r"""The film's spectral response: colour-matching functions divided by $\int\bar y$.
+
+    What `film_samples_to_XYZ` needs to turn spectral samples into XYZ, without a film's
+    accumulators (the render driver's paths carry only this). `Film(...).response` is the
+    response of a film.
+
+    **Arguments:**
+
+    Build one with `SpectralResponse.from_observer(cmfs=..., observer=..., dtype=...)`
+    (arguments as `Film`).
+
+    **Fields:**
+
+    `cmf_wavelengths_nm` (n,) [nm], `cmf_values` (n, 3) [nm^-1] (normalised CMFs).
+
+    !!! note "Thesis"
+        Eq. 2.12-2.14 (tristimulus integrals), section 2.3.2.
+
+    ??? cite "References"
+        `Jakob2022` (`spectrum_to_xyz`); `CIE2018`.
+    """
+
+    cmf_wavelengths_nm: Float[Array, " n"]
+    cmf_values: Float[Array, "n 3"]
+
+    @classmethod
+    def from_observer(
+        cls, *, cmfs=None, observer: str = DEFAULT_OBSERVER, dtype=None
+    ) -> "SpectralResponse":
+        """The response of `cmfs` (default: the observer's CIE table), as `Film` builds it."""
+        return cls(*_normalised_cmfs(cmfs, observer, dtype))
+
+
 class Film(eqx.Module):
     r"""Per-pixel accumulators of weighted XYZ and weights (thesis eq. 2.34-2.35).
 
@@ -106,20 +151,19 @@ class Film(eqx.Module):
     ):
         self.width = check_positive_int(width, "width")
         self.height = check_positive_int(height, "height")
-        if dtype is None:
-            dtype = jnp.zeros(()).dtype  # the default float (float64 under jax_enable_x64)
-        if not jnp.issubdtype(dtype, jnp.floating):
-            raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
-        wl, values = _cmf_table(cmfs, observer)
-        y_integral = np.trapezoid(values[:, 1], wl)
+        self.cmf_wavelengths_nm, self.cmf_values = _normalised_cmfs(cmfs, observer, dtype)
+        dtype = self.cmf_values.dtype
         self.xyz_sum = jnp.zeros((self.height, self.width, 3), dtype)
         self.weight_sum = jnp.zeros((self.height, self.width), dtype)
-        self.cmf_wavelengths_nm = jnp.asarray(wl, dtype)
-        self.cmf_values = jnp.asarray(values / y_integral, dtype)
+
+    @property
+    def response(self) -> SpectralResponse:
+        """The film's colour-matching functions as a `SpectralResponse`."""
+        return SpectralResponse(self.cmf_wavelengths_nm, self.cmf_values)
 
 
 def film_samples_to_XYZ(
-    film: Film, L_lambda: ArrayLike, wavelengths_nm: ArrayLike, pdf: ArrayLike
+    film: "Film | SpectralResponse", L_lambda: ArrayLike, wavelengths_nm: ArrayLike, pdf: ArrayLike
 ) -> Float[Array, "*batch 3"]:
     r"""Tristimulus estimate of spectral radiance samples, normalised so $L \equiv 1$ gives $Y = 1$.
 
@@ -128,7 +172,7 @@ def film_samples_to_XYZ(
 
     **Arguments:**
 
-    - `film`: the `Film` whose colour-matching functions are used.
+    - `film`: the `Film` (or its `SpectralResponse`) whose colour-matching functions are used.
     - `L_lambda`: spectral radiance (..., n_lambda). [W m^-2 sr^-1 nm^-1]
     - `wavelengths_nm`: the sampled wavelengths, broadcastable to `L_lambda`. [nm]
     - `pdf`: wavelength density of each sample (the marginal of one wavelength), broadcastable

@@ -32,6 +32,7 @@ import numpy as np
 
 from .._checks import as_float_array, check_choice, check_last_axis, check_positive_int
 from .._types import Array, ArrayLike, Float
+from ._base import AbstractCamera
 
 FOV_AXES = ("x", "y", "diagonal", "smaller", "larger")
 
@@ -271,7 +272,7 @@ def perspective(
     return perspective_frustum(-r, r, -t, t, n, f)
 
 
-class PinholeCamera(eqx.Module):
+class PinholeCamera(AbstractCamera):
     r"""Ideal pinhole camera (thesis section 2.3.1) in Mitsuba 3's conventions.
 
     Build it with `PinholeCamera.from_look_at(...)` or `PinholeCamera.from_to_world(...)`.

@@ -1,47 +1,97 @@
-"""Light transport (thesis ch. 8-9): meshes, BVH, scenes, integrators and the render driver."""
+"""Light transport (thesis ch. 8-9): a spectral path tracer built from plugins.
 
-# --- geometry (helper G) ---
-from ._bvh import BVH as BVH, build_bvh as build_bvh
-from ._intersect import (
+Every renderer concept is an abstract `equinox` Module with final implementations, one per
+file, in a folder that shows the architecture (the model of diffrax's `_solver/`):
+
+- `_integrators/`: `AbstractIntegrator` (`Path`, `Direct`);
+- `_samplers/`: `AbstractSampler` (`Independent`, `OwenSobol`);
+- `_materials/`: `AbstractMaterial`, BSDF plugins that build `radiometria.scattering` BxDFs
+  (`Diffuse`, `OrenNayar`, `Conductor`, `RoughConductor`, `Dielectric`, `RoughDielectric`);
+- `_lights/`: `AbstractLight` (`AreaLight`); `_textures/`: `AbstractTexture`
+  (`ConstantTexture`);
+- `_accelerators/`: `AbstractAccelerator` (`BruteForceAccelerator`, `BVHAccelerator`), with
+  the traversal back ends of `_geometry/` (native CPU kernel, JAX) inside;
+- cameras are `radiometria.camera.AbstractCamera`s, media and phase functions
+  `radiometria.media.AbstractMedium` / `AbstractPhaseFunction`;
+- `_scenes/`: scene descriptions, the JSON and Mitsuba 3 XML formats, `compile_scene`;
+- `_registry.py`: the names scene files and the command line use, one registry per concept;
+- `_driver.py`: `render`, the batched, device-sharded render loop.
+"""
+
+from ._accelerators import (
+    AbstractAccelerator as AbstractAccelerator,
+    BruteForceAccelerator as BruteForceAccelerator,
+    BVHAccelerator as BVHAccelerator,
+    build_accelerator as build_accelerator,
+)
+from ._driver import render as render
+from ._geometry import (
+    BVH as BVH,
+    AbstractTraversalBackend as AbstractTraversalBackend,
     Hit as Hit,
+    JaxTraversal as JaxTraversal,
+    NativeCPUTraversal as NativeCPUTraversal,
+    TriangleMesh as TriangleMesh,
+    build_bvh as build_bvh,
+    icosphere as icosphere,
     intersect_any as intersect_any,
     intersect_brute_force_any as intersect_brute_force_any,
     intersect_brute_force_closest as intersect_brute_force_closest,
     intersect_closest as intersect_closest,
-)
-from ._loaders import load_mesh as load_mesh, load_mitsuba_xml as load_mitsuba_xml
-from ._mesh import (
-    TriangleMesh as TriangleMesh,
-    icosphere as icosphere,
+    native_status as native_status,
     sample_triangle_point as sample_triangle_point,
     triangle_areas as triangle_areas,
     triangle_normals as triangle_normals,
 )
-from ._native import native_status as native_status
-from ._scene import (
+from ._integrators import (
+    AbstractIntegrator as AbstractIntegrator,
+    Direct as Direct,
+    Path as Path,
+    path_radiance as path_radiance,
+    sample_dimensions as sample_dimensions,
+)
+from ._lights import (
+    AbstractLight as AbstractLight,
+    AreaLight as AreaLight,
+    LightSample as LightSample,
+)
+from ._materials import (
+    MITSUBA_IOR as MITSUBA_IOR,
+    AbstractMaterial as AbstractMaterial,
+    Conductor as Conductor,
+    Dielectric as Dielectric,
+    Diffuse as Diffuse,
+    MaterialSet as MaterialSet,
+    OrenNayar as OrenNayar,
+    RoughConductor as RoughConductor,
+    RoughDielectric as RoughDielectric,
+    ScaledBxDF as ScaledBxDF,
+)
+from ._render_scene import RenderScene as RenderScene
+from ._samplers import (
+    AbstractSampler as AbstractSampler,
+    Independent as Independent,
+    OwenSobol as OwenSobol,
+    sampler_seed as sampler_seed,
+)
+from ._scenes import (
     AreaEmitter as AreaEmitter,
     CameraDescription as CameraDescription,
     FilmDescription as FilmDescription,
     Material as Material,
     SceneDescription as SceneDescription,
     SceneError as SceneError,
+    compile_scene as compile_scene,
+    load_mesh as load_mesh,
+    load_mitsuba_xml as load_mitsuba_xml,
     load_scene as load_scene,
+    scene_integrator as scene_integrator,
 )
-
-# isort: split
-
-# --- integrators (helper P) ---
-from ._driver import render as render
-from ._integrators import (
-    direct_radiance as direct_radiance,
-    path_radiance as path_radiance,
-    sample_dimensions as sample_dimensions,
-)
-from ._materials import MaterialTables as MaterialTables
-from ._render_scene import RenderScene as RenderScene, compile_scene as compile_scene
 from ._spectral import (
+    LinearRGB as LinearRGB,
     SpectrumTable as SpectrumTable,
     sample_hero_wavelengths as sample_hero_wavelengths,
-    spectrum_values as spectrum_values,
+    tabulate_spectrum as tabulate_spectrum,
     wavelength_grid_nm as wavelength_grid_nm,
 )
+from ._textures import AbstractTexture as AbstractTexture, ConstantTexture as ConstantTexture

@@ -9,12 +9,14 @@ converts it to linear sRGB:
    against the available memory before anything is allocated. `k` does not depend on spp
    (passes past spp are inactive paths, which cost nothing), so one compiled step serves any
    sample count.
-2. **Samples.** Pass `s` of pixel `p` draws its variates from `sample_block` (independent or
-   padded Owen-scrambled Sobol); they depend only on `(seed, s, p)`, so the image depends
-   neither on the batching nor on the number of devices. The film position is uniform in the
-   pixel (splatting) or the pixel centre plus an offset drawn from the filter (filter
-   importance sampling); four hero wavelengths come from `sample_hero_wavelengths`.
-3. **Integrator.** `path_radiance` gives $L(\lambda_i)$ (`"direct"` is its two-segment case).
+2. **Samples.** Pass `s` of pixel `p` draws its variates from the sampler plugin
+   (`AbstractSampler`: independent or padded Owen-scrambled Sobol); they depend only on
+   `(seed, s, p)`, so the image depends neither on the batching nor on the number of
+   devices. The film position is uniform in the pixel (splatting) or the pixel centre plus
+   an offset drawn from the filter (filter importance sampling); four hero wavelengths come
+   from `sample_hero_wavelengths`.
+3. **Integrator.** The integrator plugin (`AbstractIntegrator`: `Path`, `Direct`) gives
+   $L(\lambda_i)$, drawing its variates from the sampler.
 4. **Film.** `radiometria.camera.film_samples_to_XYZ` turns the four radiances into one XYZ
    estimate, $\frac14\sum_i L(\lambda_i)\bar{\mathbf{x}}(\lambda_i)/p(\lambda_i)/\int\bar y$
    (a constant spectrum $L$ gives $Y = L$; the D65 white of $Y = 1$ gives linear sRGB
@@ -42,24 +44,37 @@ XLA's deterministic ops are enabled).
 import functools
 import math
 import os
+import sys
 from dataclasses import dataclass
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.experimental import multihost_utils
+from jax.sharding import Mesh, PartitionSpec as P
+from tqdm import tqdm
 
 from .._checks import check_choice, check_positive_int
-from ..camera import Film, film_develop, film_samples_to_XYZ
-from ._integrators import DIMENSIONS_PER_BOUNCE, path_radiance
+from ..camera import (
+    AbstractCamera,
+    AbstractFilter,
+    Film,
+    GaussianFilter,
+    SpectralResponse,
+    film_develop,
+    film_samples_to_XYZ,
+)
+from ._integrators import AbstractIntegrator, Path
+from ._registry import INTEGRATORS, SAMPLERS
 from ._render_scene import RenderScene
-from ._samplers import SAMPLERS, sample_block, sampler_seed
+from ._samplers import AbstractSampler, Independent, sampler_seed
+from ._scenes import SceneDescription, compile_scene, load_scene, scene_integrator
 from ._spectral import sample_hero_wavelengths
 
-__all__ = ["INTEGRATORS", "RECONSTRUCTIONS", "render"]
+__all__ = ["RECONSTRUCTIONS", "render"]
 
 
-INTEGRATORS = ("path", "direct")
 RECONSTRUCTIONS = ("splat", "importance")
 CAMERA_DIMENSIONS = 4  # [film x, film y, wavelength, unused]: keeps the bounce pairs aligned
 _MAX_PIXELS = 2**31 - 2**20  # pixel indices are int32
@@ -104,12 +119,14 @@ def _plan(n_pixels: int, spp: int, batch: int, n_devices: int) -> _Plan:
 
 
 class _Kernel(eqx.Module):
-    """Everything the paths of a step read: scene, camera, filter (one pytree, replicated)."""
+    """Everything the paths of a step read (one pytree, replicated over the devices)."""
 
     scene: RenderScene
-    camera: object
-    rfilter: object
-    cmfs: Film  # a 1 x 1 film: only its colour-matching functions are used here
+    camera: AbstractCamera
+    rfilter: AbstractFilter
+    response: SpectralResponse  # the film's colour-matching functions
+    integrator: AbstractIntegrator
+    sampler: AbstractSampler
 
 
 @dataclass(frozen=True)
@@ -120,9 +137,6 @@ class _Config:
     tile: int  # pixels per step
     passes: int  # samples per pixel per step
     width: int
-    max_depth: int
-    rr_depth: int
-    sampler: str
     reconstruction: str
     devices: tuple
 
@@ -152,13 +166,13 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     pix = jnp.repeat(jnp.where(valid_pixel, pixel, 0), k)  # (n,): pixel-major
     passes = jnp.tile(pass_start + jnp.arange(k, dtype=jnp.int32), t)
     seed = sampler_seed(key)
-    sample = functools.partial(sample_block, seed, cfg.sampler, dtype=dtype)
+    sample = functools.partial(kernel.sampler.sample, seed, dtype=dtype)
     u = sample(pix, passes, 0, CAMERA_DIMENSIONS)
 
-    def bounce_samples(b, paths):
+    def variates(first, n_dims, paths):
+        # the integrator's dimensions follow the camera's
         paths = jnp.minimum(paths, t * k - 1)
-        first = CAMERA_DIMENSIONS + DIMENSIONS_PER_BOUNCE * b
-        return sample(pix[paths], passes[paths], first, DIMENSIONS_PER_BOUNCE)
+        return sample(pix[paths], passes[paths], CAMERA_DIMENSIONS + first, n_dims)
 
     corner = jnp.stack([pix % cfg.width, pix // cfg.width], axis=-1).astype(dtype)
     if cfg.reconstruction == "importance":
@@ -172,17 +186,15 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     origins, directions = kernel.camera.generate_ray(raster)
     wavelength_nm, pdf = sample_hero_wavelengths(u[:, 2])
     active = jnp.repeat(valid_pixel, k) & (passes < spp)
-    radiance = path_radiance(
+    radiance = kernel.integrator.radiance(
         kernel.scene,
         origins.astype(dtype),
         directions.astype(dtype),
         wavelength_nm.astype(dtype),
-        bounce_samples,
-        max_depth=cfg.max_depth,
-        rr_depth=cfg.rr_depth,
-        active=active,
+        variates,
+        active,
     )
-    xyz = film_samples_to_XYZ(kernel.cmfs, radiance, wavelength_nm, pdf)
+    xyz = film_samples_to_XYZ(kernel.response, radiance, wavelength_nm, pdf)
     ok = active & jnp.all(jnp.isfinite(xyz), axis=-1)
     w = jnp.where(ok, weight.astype(dtype), 0.0)
     values = jnp.concatenate([jnp.where(ok[:, None], xyz, 0.0) * w[:, None], w[:, None]], axis=-1)
@@ -224,19 +236,21 @@ def render(
     seed: int = 0,
     width: int | None = None,
     height: int | None = None,
-    max_depth: int | None = None,
-    integrator: str = "path",
-    sampler: str = "independent",
+    integrator: AbstractIntegrator | None = None,
+    sampler: AbstractSampler | None = None,
     batch: int | None = None,
     progress: bool = True,
     devices=None,
-    camera=None,
-    rfilter=None,
-    rr_depth: int | None = None,
+    camera: AbstractCamera | None = None,
+    rfilter: AbstractFilter | None = None,
     reconstruction: str = "splat",
     return_xyz: bool = False,
 ):
     r"""Render a scene spectrally into a linear sRGB image (thesis ch. 8-9; eq. 2.35).
+
+    Strategies are objects: `render(scene, integrator=Path(max_depth=8), sampler=OwenSobol())`
+    (`radiometria.render.Path`, `Direct`, `Independent`, `OwenSobol`, or any subclass of
+    `AbstractIntegrator` / `AbstractSampler`; see "Extending the renderer" in the docs).
 
     **Arguments:**
 
@@ -246,10 +260,10 @@ def render(
     - `spp`: samples (camera paths) per pixel, >= 1.
     - `seed`: the seed of `jax.random.key`; the image is a deterministic function of it.
     - `width`, `height`: image size [px]; default: the scene's film.
-    - `max_depth`: largest number of path segments (Mitsuba's meaning: 1 = emitters seen
-        directly, 2 = direct illumination); default: the scene's, else 8.
-    - `integrator`: `"path"` (NEE + MIS + Russian roulette) or `"direct"`.
-    - `sampler`: `"independent"` or `"sobol"` (padded Owen-scrambled Sobol).
+    - `integrator`: an `AbstractIntegrator`; default: the one the scene file asks for (its
+        `max_depth` and `rr_depth`), else `Path()` (NEE + MIS + Russian roulette, 8 segments).
+    - `sampler`: an `AbstractSampler`; default `Independent()`. `OwenSobol()` (padded
+        Owen-scrambled Sobol) reaches a given error sooner on the Cornell box.
     - `batch`: paths traced per step (bounds memory); default: about 2^16 per CPU device,
         2^20 per GPU, within the device memory.
     - `progress`: show a tqdm progress bar on stderr.
@@ -258,10 +272,9 @@ def render(
         set `XLA_FLAGS=--xla_force_host_platform_device_count=<cores>` before JAX is imported
         to get one device per core (2.4x faster on 2 cores; `benchmarks/bench_render.py`
         does this).
-    - `camera`, `rfilter`: a `radiometria.camera.PinholeCamera` and reconstruction filter, for
-        a `RenderScene` (default filter: Gaussian, stddev 0.5 px, radius 2 px).
-    - `rr_depth`: path segments before Russian roulette starts (Mitsuba's `rr_depth`);
-        default: the scene's, else 5.
+    - `camera`, `rfilter`: an `radiometria.camera.AbstractCamera` (e.g. `PinholeCamera`) and
+        reconstruction filter, for a `RenderScene` (default filter: Gaussian, stddev 0.5 px,
+        radius 2 px); a loaded scene has its own camera, and `rfilter` overrides its filter.
     - `reconstruction`: how samples become pixels (thesis 2.3.2): `"splat"` (default; samples
         uniform in their pixel, each added to every pixel within the filter radius with weight
         $f$, eq. 2.34, as Mitsuba's `hdrfilm`) or `"importance"` (filter importance sampling:
@@ -290,22 +303,16 @@ def render(
         sampling).
     """
     spp = check_positive_int(spp, "spp")
-    if max_depth is not None:
-        max_depth = check_positive_int(max_depth, "max_depth")
-    if rr_depth is not None:
-        rr_depth = check_positive_int(rr_depth, "rr_depth")
-    check_choice(integrator, "integrator", INTEGRATORS)
-    check_choice(sampler, "sampler", SAMPLERS)
+    _check_plugin(integrator, "integrator", AbstractIntegrator, INTEGRATORS, "Path(max_depth=8)")
+    _check_plugin(sampler, "sampler", AbstractSampler, SAMPLERS, "OwenSobol()")
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"`seed` must be an int, got {type(seed).__name__} {seed!r}.")
-    scene, camera, rfilter, scene_depth, scene_rr = _resolve_scene(
+    scene, camera, rfilter, scene_integrator_ = _resolve_scene(
         scene, camera, rfilter, width, height
     )
-    max_depth = scene_depth if max_depth is None else max_depth
-    rr_depth = rr_depth if rr_depth is not None else scene_rr if scene_rr is not None else 5
-    if integrator == "direct":  # the path estimator with two segments and no roulette
-        max_depth, rr_depth = min(max_depth, 2), 2
+    integrator = scene_integrator_ if integrator is None else integrator
+    sampler = Independent() if sampler is None else sampler
     width, height = int(camera.width), int(camera.height)
     n_pixels = width * height
     if n_pixels > _MAX_PIXELS:
@@ -325,19 +332,9 @@ def render(
             f"{available / 2**30:.1f} GiB available; render a smaller image."
         )
     plan = _plan(n_pixels, spp, batch, len(devices))
-    kernel = _Kernel(scene, camera, rfilter, Film(1, 1, dtype=jnp.float32))
-    cfg = _Config(
-        n_pixels,
-        plan.tile,
-        plan.passes,
-        width,
-        max_depth,
-        rr_depth,
-        sampler,
-        reconstruction,
-        tuple(devices),
-    )
-    step = _compiled_step(cfg)
+    response = SpectralResponse.from_observer(dtype=jnp.float32)
+    kernel = _Kernel(scene, camera, rfilter, response, integrator, sampler)
+    cfg = _Config(n_pixels, plan.tile, plan.passes, width, reconstruction, tuple(devices))
     key = jax.random.key(int(seed))
     spp_arr = jnp.int32(spp)
     film = Film(width, height, dtype=jnp.float32)
@@ -353,7 +350,7 @@ def render(
     for i in steps:
         group, tile = divmod(i, plan.n_tiles)
         pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
-        film = step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel)
+        film = _step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg)
         if serialise:
             film = jax.block_until_ready(film)
         if bar is not None:  # the step's paths: its pixels in the image x its passes below spp
@@ -362,8 +359,6 @@ def render(
     if bar is not None:
         bar.close()
     if n_proc > 1:
-        from jax.experimental import multihost_utils
-
         parts = multihost_utils.process_allgather((film.xyz_sum, film.weight_sum))
         film = eqx.tree_at(
             lambda f: (f.xyz_sum, f.weight_sum), film, tuple(jnp.sum(p, axis=0) for p in parts)
@@ -371,23 +366,40 @@ def render(
     return film_develop(film, "XYZ" if return_xyz else "sRGB")
 
 
-def _resolve_scene(scene, camera, rfilter, width, height):
-    """(RenderScene, camera, filter, default max_depth, rr_depth) from what `render` got."""
-    from ..camera import GaussianFilter
-    from ._render_scene import DEFAULT_UNBOUNDED_DEPTH, compile_scene
-    from ._scene import SceneDescription, load_scene
+def _check_plugin(value, name: str, base: type, registry: dict, example: str) -> None:
+    """A strategy must be an object (`None` for the default); strings name plugins only in
+    scene files and on the command line."""
+    if value is None or isinstance(value, base):
+        return
+    hint = ""
+    if isinstance(value, str):
+        known = {k: v.__name__ for k, v in registry.items()}
+        cls = known.get(value)
+        hint = (
+            f" Pass an object, e.g. {cls}()"
+            if cls
+            else f" Known names (for scene files and the command line): {known}."
+        )
+    raise TypeError(
+        f"`{name}` must be a {base.__name__} such as {example}, got "
+        f"{type(value).__name__} {value!r}.{hint}"
+    )
 
+
+def _resolve_scene(scene, camera, rfilter, width, height):
+    """(RenderScene, camera, filter, default integrator) from what `render` got."""
     if isinstance(scene, str | os.PathLike):
         scene = load_scene(scene)
     if isinstance(scene, SceneDescription):
         if camera is not None:
             raise ValueError("`camera` is for a RenderScene; a loaded scene has its own camera.")
         rs, cam, filt = compile_scene(scene, width=width, height=height)
-        depth = DEFAULT_UNBOUNDED_DEPTH if scene.max_depth is None else scene.max_depth
-        return rs, cam, filt if rfilter is None else rfilter, depth, scene.rr_depth
+        return rs, cam, filt if rfilter is None else rfilter, scene_integrator(scene)
     if isinstance(scene, RenderScene):
         if camera is None:
-            raise ValueError("Rendering a `RenderScene` needs `camera` (a PinholeCamera).")
+            raise ValueError("Rendering a `RenderScene` needs `camera` (an AbstractCamera).")
+        if not isinstance(camera, AbstractCamera):
+            raise TypeError(f"`camera` must be an AbstractCamera, got {type(camera).__name__}.")
         for name, value, have in (
             ("width", width, camera.width),
             ("height", height, camera.height),
@@ -397,7 +409,7 @@ def _resolve_scene(scene, camera, rfilter, width, height):
                     f"`{name}`={value} differs from the camera's {have} [px]; build the camera "
                     "with the image size you want."
                 )
-        return scene, camera, GaussianFilter() if rfilter is None else rfilter, 8, None
+        return scene, camera, GaussianFilter() if rfilter is None else rfilter, Path()
     raise TypeError(
         f"`scene` must be a scene name, a path, a loaded scene or a RenderScene, got "
         f"{type(scene).__name__}."
@@ -417,45 +429,27 @@ def _default_batch(devices) -> int:
     return per_device * len(devices)
 
 
-_STEP_CACHE: dict = {}
-
-
-def _compiled_step(cfg: _Config):
-    """The jitted step `(film, kernel, key, spp, pass_start, pixel) -> film` for `cfg` (cached).
+@functools.partial(jax.jit, static_argnames="cfg", donate_argnums=0)
+def _step(film, kernel, key, spp, pass_start, pixel, *, cfg: _Config):
+    """One step `(film, kernel, key, spp, pass_start, pixel) -> film`, compiled once per `cfg`
+    and kernel structure (JAX's jit cache).
 
     The paths are traced under `jax.shard_map` over a 1-D mesh of `cfg.devices`, each device
     taking its share of the tile's pixels; their results are then added to the film (replicated
     accumulators), which gathers them from the devices.
     """
-    if cfg in _STEP_CACHE:
-        return _STEP_CACHE[cfg]
-    from jax.sharding import Mesh, PartitionSpec as P
-
-    mesh = Mesh(np.asarray(cfg.devices), ("pixels",))
     trace = jax.shard_map(
         functools.partial(_trace, cfg=cfg),
-        mesh=mesh,
+        mesh=Mesh(np.asarray(cfg.devices), ("pixels",)),
         in_specs=(P(), P(), P(), P(), P("pixels")),
         out_specs=P("pixels"),
         check_vma=False,
     )
-
-    @functools.partial(jax.jit, donate_argnums=0)
-    def step(film, kernel, key, spp, pass_start, pixel):
-        footprints = trace(kernel, key, spp, pass_start, pixel)
-        return _add_footprints(film, pixel, footprints, cfg.width, film.height)
-
-    if len(_STEP_CACHE) > 16:
-        _STEP_CACHE.clear()
-    _STEP_CACHE[cfg] = step
-    return step
+    footprints = trace(kernel, key, spp, pass_start, pixel)
+    return _add_footprints(film, pixel, footprints, cfg.width, film.height)
 
 
 def _progress_bar(progress: bool, total: int | None):
     if not progress:
         return None
-    import sys
-
-    from tqdm import tqdm
-
     return tqdm(total=total, desc="render", unit="path", unit_scale=True, file=sys.stderr)

@@ -5,7 +5,7 @@ emitted radiance) at the four hero wavelengths of each path. All of them arrive 
 `SpectrumTable`, sampled on one uniform 1 nm grid over the visible range [360, 830] nm and
 interpolated linearly, as PBRT's `DenselySampledSpectrum` and Mitsuba's `RegularSpectrum`
 evaluate spectra: one gather and one lerp per wavelength serve RGB-upsampled, measured and
-blackbody spectra alike. `spectrum_values` tabulates a scene parameter.
+blackbody spectra alike. `tabulate_spectrum` tabulates a scene parameter.
 
 **RGB conventions (as Mitsuba 3's `scalar_spectral` and PBRT-v4).** A linear-sRGB reflectance
 becomes the bounded sigmoid-polynomial spectrum of the Jakob-Hanika sRGB table
@@ -17,21 +17,31 @@ constant 1/98.99 for the D65 scale (its Y is 0.999 on its 5 nm CMF table); the t
 about 0.1 % in the image means (Cornell box at 256 x 256: within 0.2 % per channel).
 """
 
+import dataclasses
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ..montecarlo import sample_visible_wavelengths, visible_wavelengths_pdf
+from ..radiometry import AbstractSpectrum, PiecewiseLinearSpectrum
+from ..upsampling import (
+    RGBAlbedoSpectrum,
+    RGBIlluminantSpectrum,
+    RGBUnboundedSpectrum,
+    forward_model,
+    get_lut,
+)
 
 __all__ = [
     "N_HERO_WAVELENGTHS",
-    "SPECTRUM_KINDS",
     "WAVELENGTH_MAX_NM",
     "WAVELENGTH_MIN_NM",
+    "LinearRGB",
     "SpectrumTable",
     "sample_hero_wavelengths",
-    "spectrum_values",
+    "tabulate_spectrum",
     "wavelength_grid_nm",
 ]
 
@@ -122,34 +132,47 @@ def sample_hero_wavelengths(u: Float[Array, "*batch"]) -> tuple[Array, Array]:
     return wavelength_nm, visible_wavelengths_pdf(wavelength_nm)
 
 
-# --- Spectra of scene parameters, tabulated on the renderer's grid ----------------------------
-
-SPECTRUM_KINDS = ("albedo", "illuminant", "unbounded")
+# --- Scene parameters tabulated on the renderer's grid ---------------------------------------
 
 
-def _rgb_spectrum(rgb: np.ndarray, kind: str, grid: np.ndarray) -> np.ndarray:
-    from ..upsampling import (
-        RGBAlbedoSpectrum,
-        RGBIlluminantSpectrum,
-        RGBUnboundedSpectrum,
-        forward_model,
-        get_lut,
-    )
+@dataclasses.dataclass(frozen=True)
+class LinearRGB:
+    """A linear sRGB triple as a scene file gives it (Rec. 709 primaries, D65 white).
 
+    Its spectrum depends on the parameter that receives it, as in Mitsuba 3: a reflectance
+    becomes an `RGBAlbedoSpectrum`, an index of refraction or a scale factor an
+    `RGBUnboundedSpectrum`, an emitted radiance an `RGBIlluminantSpectrum` (thesis 2.2.3).
+    The receiving plugin passes that class to `tabulate_spectrum`.
+
+    **Fields:**
+
+    - `rgb`: `(3,)` float64 linear sRGB components. [1, or the parameter's unit]
+    """
+
+    rgb: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "rgb", np.asarray(self.rgb, np.float64).reshape(3))
+
+
+SpectralValue = LinearRGB | AbstractSpectrum | float
+"""What a scene file gives for a spectral parameter: an RGB triple, a spectrum or a number."""
+
+_RGB_SPECTRA = (RGBAlbedoSpectrum, RGBUnboundedSpectrum, RGBIlluminantSpectrum)
+
+
+def _rgb_spectrum(rgb: np.ndarray, rgb_spectrum: type, grid: np.ndarray) -> np.ndarray:
     if np.any(rgb < 0) or not np.all(np.isfinite(rgb)):
         raise ValueError(f"RGB values must be finite and >= 0, got {rgb.tolist()}.")
-    if kind == "albedo" and np.any(rgb > 1):
+    if rgb_spectrum is RGBAlbedoSpectrum and np.any(rgb > 1):
         raise ValueError(f"An RGB reflectance must lie in [0, 1], got {rgb.tolist()}.")
-    cls = {
-        "albedo": RGBAlbedoSpectrum,
-        "unbounded": RGBUnboundedSpectrum,
-        "illuminant": RGBIlluminantSpectrum,
-    }[kind]
-    # One compiled program per kind (op-by-op dispatch would compile every primitive). The
+    # One compiled program per class (op-by-op dispatch would compile every primitive). The
     # illuminant's constructor reads the colour space's cached forward model with NumPy, so
     # that cache is filled outside the trace first.
     forward_model("sRGB")
-    values = _evaluate_rgb_spectrum(cls, get_lut("sRGB"), jnp.asarray(rgb), jnp.asarray(grid))
+    values = _evaluate_rgb_spectrum(
+        rgb_spectrum, get_lut("sRGB"), jnp.asarray(rgb), jnp.asarray(grid)
+    )
     return np.asarray(values, np.float64)
 
 
@@ -158,21 +181,27 @@ def _evaluate_rgb_spectrum(cls, lut, rgb, grid):
     return cls(lut, rgb)(grid)
 
 
-def spectrum_values(spec: dict, kind: str) -> np.ndarray:
+@eqx.filter_jit
+def _evaluate_spectrum(spectrum, grid):
+    return spectrum(grid)
+
+
+def tabulate_spectrum(value: SpectralValue, rgb_spectrum: type) -> np.ndarray:
     r"""A scene's spectral parameter tabulated on the renderer's grid (`wavelength_grid_nm`).
 
     **Arguments:**
 
-    - `spec`: one of the forms of `radiometria.render.load_scene`'s scene descriptions:
-        `{"rgb": (3,)}` (linear sRGB), `{"spectrum": (wavelengths_nm, values)}` (linear in
-        between, zero outside, as the measured Cornell data), `{"blackbody": {"temperature":
-        T, "scale": s}}` ($s$ times Planck's law, thesis eq. 1.24) or `{"value": x}`.
-    - `kind`: how an RGB triple becomes a spectrum: `"albedo"` (a reflectance in [0, 1]:
-        the bounded sigmoid-polynomial spectrum of Jakob & Hanika 2019), `"illuminant"` (an
-        emitted radiance: PBRT's `RGBIlluminantSpectrum` and Mitsuba's spectral `rgb` emitter,
-        i.e. $s\,S_{\mathrm{rgb}/s}(\lambda)\,D_{65}(\lambda)$ with $s = 2\max(\mathrm{rgb})$
-        and the D65 SPD scaled to luminance $Y = 1$, so that white (1, 1, 1) emits D65 and
-        renders as linear sRGB (1, 1, 1)) or `"unbounded"` (the same without D65).
+    - `value`: a `LinearRGB` triple, a `radiometria.radiometry.AbstractSpectrum` (for
+        example a `PiecewiseLinearSpectrum` of measured data, linear in between and zero
+        outside, or a `BlackbodySpectrum`: thesis eq. 1.24), or a number (a constant
+        spectrum).
+    - `rgb_spectrum`: the class that turns an RGB triple into a spectrum, chosen by the
+        parameter's meaning (thesis 2.2.3): `RGBAlbedoSpectrum` (a reflectance in [0, 1]: the
+        bounded sigmoid-polynomial spectrum of Jakob & Hanika 2019), `RGBIlluminantSpectrum`
+        (an emitted radiance: $s\,S_{\mathrm{rgb}/s}(\lambda)\,D_{65}(\lambda)$ with
+        $s = 2\max(\mathrm{rgb})$ and the D65 SPD scaled to luminance $Y = 1$, so that white
+        (1, 1, 1) emits D65 and renders as linear sRGB (1, 1, 1)) or `RGBUnboundedSpectrum`
+        (the same without D65), all from `radiometria.upsampling`.
 
     **Returns:**
 
@@ -182,27 +211,23 @@ def spectrum_values(spec: dict, kind: str) -> np.ndarray:
         `Jakob2019` (sigmoid-polynomial upsampling); `Pharr2023` §4.6.6 (RGB spectra);
         `Jakob2022` (Mitsuba's `d65` spectrum for RGB emitters).
     """
-    from .._checks import check_choice
-
-    check_choice(kind, "kind", SPECTRUM_KINDS)
+    if rgb_spectrum not in _RGB_SPECTRA:
+        raise ValueError(
+            f"`rgb_spectrum` must be one of {', '.join(c.__name__ for c in _RGB_SPECTRA)}, "
+            f"got {rgb_spectrum!r}."
+        )
     grid = wavelength_grid_nm()
-    if not isinstance(spec, dict) or len(spec) != 1:
-        raise ValueError(f"A spectral parameter must be a dict with one key, got {spec!r}.")
-    ((form, value),) = spec.items()
-    if form == "rgb":
-        return _rgb_spectrum(np.asarray(value, np.float64).reshape(3), kind, grid)
-    if form == "spectrum":
-        wl, v = (np.asarray(a, np.float64) for a in value)
+    if isinstance(value, LinearRGB):
+        return _rgb_spectrum(value.rgb, rgb_spectrum, grid)
+    if isinstance(value, PiecewiseLinearSpectrum):
+        # NumPy in float64, so that measured data is tabulated exactly, whatever JAX's dtype.
+        wl, v = (np.asarray(a, np.float64) for a in (value.wavelengths_nm, value.values))
         return np.interp(grid, wl, v, left=0.0, right=0.0)
-    if form == "blackbody":
-        from ..radiometry import planck
-
-        temperature = float(value["temperature"])
-        if not temperature > 0:
-            raise ValueError(f"Blackbody temperature must be > 0 [K], got {temperature}.")
-        return float(value.get("scale", 1.0)) * np.asarray(planck(grid, temperature), np.float64)
-    if form == "value":
+    if isinstance(value, AbstractSpectrum):
+        return np.asarray(_evaluate_spectrum(value, jnp.asarray(grid)), np.float64)
+    if isinstance(value, int | float | np.floating | np.integer) and not isinstance(value, bool):
         return np.full(grid.shape, float(value))
-    raise ValueError(
-        f"Unknown spectrum form {form!r}; valid forms are 'rgb', 'spectrum', 'blackbody', 'value'."
+    raise TypeError(
+        "A spectral parameter must be a LinearRGB, an AbstractSpectrum or a number, got "
+        f"{type(value).__name__} {value!r}."
     )

@@ -1,21 +1,20 @@
-r"""Integrators: spectral radiance along camera rays (thesis ch. 8).
+r"""Unidirectional path tracing: `path_radiance` and the `Path` integrator (thesis ch. 8).
 
-Both integrators estimate the light transport equation
+`path_radiance` estimates the light transport equation
 
 $$L_o(p, \omega_o) = L_e(p, \omega_o) + \int_{S^2} f(p, \omega_o, \omega_i)\, L_i(p, \omega_i)
   \,|\cos\theta_i|\, d\omega_i$$
 
-for a batch of rays at once, at the four hero wavelengths of each path.
-
-- `path_radiance`: unidirectional path tracing with next-event estimation (one light sample per
-  vertex), multiple importance sampling of light and BSDF samples with the power heuristic, and
-  Russian roulette. Depths follow Mitsuba 3's `path` integrator: `max_depth` is the largest
+for a batch of rays at once, at the four hero wavelengths of each path, by unidirectional
+path tracing with next-event estimation (one light sample per vertex), multiple importance
+sampling of light and BSDF samples with the power heuristic, and Russian roulette. Depths
+follow Mitsuba 3's `path` integrator: `max_depth` is the largest
   number of path segments counted from the camera, so `max_depth=1` sees only emitters visible
   from the camera and `max_depth=2` is direct illumination; Russian roulette starts once
   `rr_depth` segments have been traced (Mitsuba's default 5), with survival probability
-  `min(max_lambda beta, 0.95)`.
-- `direct_radiance`: direct illumination (emission, one light sample and one BSDF sample,
-  combined with MIS); the same estimator as `path_radiance` with `max_depth=2`.
+  `min(max_lambda beta, 0.95)`. The scene's plugins do the rest: its accelerator finds hits,
+  its light (`AbstractLight`) samples and weighs next-event estimation, and its materials
+  (`MaterialSet`) build the BxDF at each hit.
 
 Everything is structure-of-arrays over the ray batch, and the loop over path segments is one
 `lax.scan` of static length `max_depth` (one compiled copy of a segment: its hit, the emission
@@ -52,22 +51,20 @@ padded Sobol sampler stratifies).
 
 import functools
 from collections.abc import Callable
+from typing import ClassVar
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from ..montecarlo import power_heuristic, sample_uniform_triangle
-from ..scattering import coordinate_system
-from ._render_scene import RenderScene
+from ..._math import dot
+from ...montecarlo import power_heuristic
+from ...scattering import coordinate_system
+from .._render_scene import RenderScene
+from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
 
-__all__ = [
-    "DIMENSIONS_PER_BOUNCE",
-    "direct_radiance",
-    "path_radiance",
-    "sample_dimensions",
-]
+__all__ = ["DIMENSIONS_PER_BOUNCE", "Path", "path_radiance", "sample_dimensions"]
 
 DIMENSIONS_PER_BOUNCE = 8
 
@@ -89,13 +86,9 @@ def sample_dimensions(max_depth: int) -> int:
     return DIMENSIONS_PER_BOUNCE * max(max_depth - 1, 0)
 
 
-def _dot(a, b):
-    return jnp.sum(a * b, axis=-1)
-
-
 def _offset(p, n, w, scale):
     """Move `p` off its surface, to the side of the normal `n` that `w` points into."""
-    side = jnp.where(_dot(n, w) >= 0, 1.0, -1.0).astype(p.dtype)
+    side = jnp.where(dot(n, w) >= 0, 1.0, -1.0).astype(p.dtype)
     return p + (side * scale)[..., None] * n
 
 
@@ -113,7 +106,7 @@ class _Vertex(eqx.Module):
 def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
     n_rays = origins.shape[0]
     tmax = jnp.full((n_rays,), jnp.inf, dtype=origins.dtype)
-    hit = scene.intersect_closest(origins, directions, tmax)
+    hit = scene.accelerator.intersect_closest(origins, directions, tmax)
     t = hit.t
     valid = hit.prim >= 0
     face = jnp.where(valid, hit.prim, 0)
@@ -121,29 +114,7 @@ def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
     b2 = hit.b2[:, None].astype(origins.dtype)
     p = scene.p0[face] + b1 * scene.e1[face] + b2 * scene.e2[face]
     n = scene.normal[face]
-    return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-_dot(n, directions))
-
-
-def _emitted(scene: RenderScene, v: _Vertex, wavelength_nm):
-    """Radiance emitted towards the ray origin at `v` (on the front side unless two-sided)."""
-    emitter = scene.face_emitter[v.face]
-    two_sided = scene.emitter_two_sided[jnp.maximum(emitter, 0)]
-    on = v.valid & (emitter >= 0) & ((v.cos_o > 0) | (two_sided & (v.cos_o != 0)))
-    le = scene.radiance(jnp.maximum(emitter, 0), wavelength_nm)
-    return jnp.where(on[:, None], le, 0.0)
-
-
-def _light_pdf_solid_angle(scene: RenderScene, face, dist, cos_light):
-    """Density of next-event estimation for a point on `face`, per unit solid angle [sr^-1].
-
-    `cos_light` is the cosine between the face normal and the direction towards the shading
-    point; it must be > 0 (front side), or != 0 for a two-sided emitter.
-    """
-    two_sided = scene.emitter_two_sided[jnp.maximum(scene.face_emitter[face], 0)]
-    cos_light = jnp.where(two_sided, jnp.abs(cos_light), cos_light)
-    pdf_area = scene.light_pdf_area[face]
-    ok = (cos_light > 0) & (pdf_area > 0)
-    return jnp.where(ok, pdf_area * dist * dist / jnp.where(ok, cos_light, 1.0), 0.0)
+    return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions))
 
 
 def path_radiance(
@@ -328,8 +299,8 @@ def _segment(
     against next-event estimation), then, unless it is the last segment, the vertex's light
     sample (NEE), its BSDF sample (the next segment) and Russian roulette."""
     v = _vertex(scene, state.o, state.d)
-    le = _emitted(scene, v, wavelength_nm)
-    pdf_light = _light_pdf_solid_angle(scene, v.face, v.t, v.cos_o)
+    le = scene.light.emitted(v.face, v.cos_o, v.valid, wavelength_nm)
+    pdf_light = scene.light.pdf_li(v.face, v.t, v.cos_o)
     w = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
     radiance = state.radiance + state.beta * le * w[:, None]
     state = eqx.tree_at(lambda s: (s.radiance, s.alive), state, (radiance, state.alive & v.valid))
@@ -345,7 +316,6 @@ def _segment(
 def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u_b, roulette):
     """At the hit `v`: next-event estimation, BSDF sampling of the next segment, roulette."""
     beta, radiance = state.beta, state.radiance
-    dtype = v.p.dtype
     wo = -state.d
     material = scene.face_material[v.face]
     two_sided = scene.materials.two_sided[material]
@@ -359,35 +329,26 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     s, t = coordinate_system(n)
 
     def to_local(w):
-        return jnp.stack([_dot(w, s), _dot(w, t), _dot(w, n)], axis=-1)
+        return jnp.stack([dot(w, s), dot(w, t), dot(w, n)], axis=-1)
 
     def to_world(w):
         return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
 
     wo_l = to_local(wo)
-    bsdf = scene.bsdf(material, wavelength_nm)
+    bsdf = scene.materials.bxdf(material, wavelength_nm)
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
 
-    # Next-event estimation: a point on an emissive triangle, chosen by power x area.
-    # (a comparison against every entry is cheaper than a binary-search loop for a few lights)
-    few = scene.light_cdf.shape[0] <= 64
-    method = "compare_all" if few else "scan_unrolled"
-    j = jnp.searchsorted(scene.light_cdf, u_b[:, 4], side="right", method=method)
-    lf = scene.light_face[jnp.clip(j, 0, scene.light_face.shape[0] - 1)]
-    bary = sample_uniform_triangle(u_b[:, 0:2]).astype(dtype)
-    y = scene.p0[lf] + bary[:, 1:2] * scene.e1[lf] + bary[:, 2:3] * scene.e2[lf]
-    to_light = y - v.p
-    dist = jnp.sqrt(_dot(to_light, to_light))
-    wi = to_light / jnp.where(dist > 0, dist, 1.0)[:, None]
-    pdf_light = _light_pdf_solid_angle(scene, lf, dist, -_dot(scene.normal[lf], wi))
-    wi_l = to_local(wi)
+    # Next-event estimation: a point on a light (e.g. an emissive triangle chosen by power x
+    # area, then a uniform point on it), weighted against BSDF sampling by MIS.
+    ls = scene.light.sample_li(v.p, u_b[:, 4], u_b[:, 0:2], wavelength_nm)
+    wi_l = to_local(ls.wi)
     f_light = bsdf.f(wo_l, wi_l) * jnp.abs(wi_l[:, 2:3])
-    w_light = power_heuristic(1, pdf_light, 1, bsdf.pdf(wo_l, wi_l))
-    use = alive & (pdf_light > 0)
-    shadow_tmax = jnp.where(use, dist * (1.0 - 1e-4) - offset, 0.0)
-    use = use & ~scene.intersect_any(_offset(v.p, v.n, wi, offset), wi, shadow_tmax)
-    le = scene.radiance(jnp.maximum(scene.face_emitter[lf], 0), wavelength_nm)
-    nee = beta * f_light * le * (w_light / jnp.where(use, pdf_light, 1.0))[:, None]
+    w_light = power_heuristic(1, ls.pdf, 1, bsdf.pdf(wo_l, wi_l))
+    use = alive & (ls.pdf > 0)
+    shadow_tmax = jnp.where(use, ls.dist * (1.0 - 1e-4) - offset, 0.0)
+    origin = _offset(v.p, v.n, ls.wi, offset)
+    use = use & ~scene.accelerator.intersect_any(origin, ls.wi, shadow_tmax)
+    nee = beta * f_light * ls.radiance * (w_light / jnp.where(use, ls.pdf, 1.0))[:, None]
     radiance = radiance + jnp.where(use[:, None], nee, 0.0)
 
     # BSDF sampling: the next path segment.
@@ -396,7 +357,7 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     weight = bs.f * (jnp.abs(bs.wi[:, 2]) / jnp.where(alive, bs.pdf, 1.0))[:, None]
     beta = jnp.where(alive[:, None], beta * weight, 0.0)
     wi = to_world(bs.wi)
-    wi = wi / jnp.sqrt(_dot(wi, wi))[:, None]
+    wi = wi / jnp.sqrt(dot(wi, wi))[:, None]
 
     # Russian roulette: survive with probability q = min(max_lambda beta eta^2, 0.95);
     # survivors are reweighted by 1/q (Mitsuba's rule).
@@ -418,33 +379,59 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     )
 
 
-def direct_radiance(
-    scene: RenderScene,
-    origins: Float[Array, "n 3"],
-    directions: Float[Array, "n 3"],
-    wavelength_nm: Float[Array, "n k"],
-    u: Float[Array, "n d"],
-) -> Float[Array, "n k"]:
-    """Direct illumination: emission plus one light and one BSDF sample combined with MIS.
-
-    The same estimator as `path_radiance(..., max_depth=2)` (Mitsuba's `direct` integrator with
-    one emitter and one BSDF sample).
+class Path(AbstractIntegrator):
+    """Unidirectional path tracing with next-event estimation, MIS and Russian roulette
+    (Mitsuba 3's `path` integrator; `path_radiance`).
 
     **Arguments:**
 
-    - `scene`, `origins`, `directions`, `wavelength_nm`: as `path_radiance`. [scene units],
-        [nm]
-    - `u`: uniform variates `(n, sample_dimensions(2))` in [0, 1), or a function as in
-        `path_radiance`. [1]
-
-    **Returns:**
-
-    Radiance estimates `(n, k)`. [W m^-2 sr^-1 nm^-1]
+    - `max_depth`: largest number of path segments (Mitsuba's meaning: 1 = emitters seen
+        directly, 2 = direct illumination), a static int >= 1 (default 8).
+    - `rr_depth`: number of segments after which Russian roulette starts (Mitsuba's
+        `rr_depth`, default 5); a value >= `max_depth` turns roulette off.
 
     !!! note "Thesis"
-        Chapter 8 (direct lighting; title only in the text).
+        Chapter 8 (light transport; title only in the text), estimated with the methods of
+        chapters 6-7.
 
     ??? cite "References"
-        `Veach1997` §9.2 (MIS); `Pharr2023` §13.3.
+        `Veach1997` ch. 9-10; `Pharr2023` §13.4; `Jakob2022` (`path`).
     """
-    return path_radiance(scene, origins, directions, wavelength_nm, u, max_depth=2, rr_depth=2)
+
+    NAME: ClassVar[str] = "path"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset({"max_depth", "rr_depth", "hide_emitters"})
+    max_depth: int = eqx.field(static=True, default=8)
+    rr_depth: int = eqx.field(static=True, default=5)
+
+    def __check_init__(self):
+        for name in ("max_depth", "rr_depth"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
+
+    @classmethod
+    def from_properties(cls, params: dict, *, where: str = "scene") -> "Path":
+        """From a scene file's `max_depth` (default 8; -1 = unbounded, taken as
+        `DEFAULT_UNBOUNDED_DEPTH`) and `rr_depth` (default 5)."""
+        depth = params.get("max_depth", 8)
+        depth = DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
+        return cls(max_depth=depth, rr_depth=params.get("rr_depth", 5))
+
+    def sample_dimensions(self) -> int:
+        return sample_dimensions(self.max_depth)
+
+    def radiance(self, scene, origins, directions, wavelength_nm, variates, active):
+        def u(b, paths):
+            first = DIMENSIONS_PER_BOUNCE * b
+            return variates(first, DIMENSIONS_PER_BOUNCE, paths)
+
+        return path_radiance(
+            scene,
+            origins,
+            directions,
+            wavelength_nm,
+            u,
+            max_depth=self.max_depth,
+            rr_depth=self.rr_depth,
+            active=active,
+        )

@@ -1,4 +1,4 @@
-"""Mesh files (OBJ, PLY through trimesh) and a Mitsuba 3 XML scene subset (thesis ch. 8).
+"""A Mitsuba 3 XML scene subset (thesis ch. 8).
 
 `load_mitsuba_xml` reads the part of Mitsuba 3's scene format that the renderer can represent,
 and rejects everything else with an error that names the file, the line and the tag:
@@ -11,8 +11,10 @@ and rejects everything else with an error that names the file, the line and the 
   `face_normals` (ignored); one `bsdf` (inline or `ref`) and one `area` emitter.
 - `transform`: `matrix` (16 values, row-major), `translate`, `rotate` (axis and `angle` in
   degrees), `scale`, `lookat` (`origin`, `target`, `up`), applied in document order.
-- `bsdf`: `diffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`,
-  `twosided` (one nested BSDF); an `id` makes it referable by `ref`.
+- `bsdf`: every plugin of `radiometria.render._registry.MATERIALS` (`diffuse`,
+  `roughdiffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`) with the
+  parameters it declares, and `twosided` (one nested BSDF); an `id` makes it referable by
+  `ref`.
 - `emitter`: `area` inside a shape; `radiance` as `rgb`, `spectrum` (`value="v"` or
   `"l1:v1, l2:v2, ..."` in nm) or blackbody (`<spectrum type="blackbody">` with
   `temperature` and optional `scale`, or Mitsuba 0.6's `<blackbody temperature=...>`).
@@ -21,8 +23,8 @@ and rejects everything else with an error that names the file, the line and the 
 - `film`: `hdrfilm` `width`, `height` (other options ignored) and an `rfilter`: `box`,
   `tent`, `gaussian`, `mitchell`, `catmullrom` or `lanczos` with its parameters.
 - `sampler`: any type; `sample_count` becomes the scene's `spp`.
-- `integrator`: `path` with `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters`
-  (ignored).
+- `integrator`: every plugin of `radiometria.render._registry.INTEGRATORS`: `path` with
+  `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters` (ignored); `direct`.
 
 Textures, other plugins, `include`, shape groups and instances are not supported.
 """
@@ -34,69 +36,25 @@ from pathlib import Path
 
 import numpy as np
 
-from ._mesh import TriangleMesh, icosphere
-from ._scene import (
+from ...radiometry import BlackbodySpectrum, PiecewiseLinearSpectrum
+from .._geometry._mesh import icosphere
+from .._registry import INTEGRATORS, LIGHTS, MATERIALS
+from .._spectral import LinearRGB, SpectralValue
+from ._description import (
     CameraDescription,
     FilmDescription,
     Material,
     SceneDescription,
     SceneError,
-    _assemble,
-    _look_at,
-    _Shape,
+    ShapeDescription,
+    assemble,
+    look_at_matrix,
 )
+from ._mesh_files import read_mesh
 
-__all__ = ["SPHERE_SUBDIVISIONS", "load_mesh", "load_mitsuba_xml"]
+__all__ = ["SPHERE_SUBDIVISIONS", "load_mitsuba_xml"]
 
 SPHERE_SUBDIVISIONS = 4  # a Mitsuba `sphere` becomes icosphere(4): 5120 triangles
-
-
-# ---------------------------------------------------------------------------------------------
-# Mesh files
-
-
-def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-
-    if not path.is_file():
-        raise FileNotFoundError(f"{where}mesh file not found: {path}")
-    try:
-        mesh = trimesh.load(str(path), force="mesh", process=False)
-    except Exception as e:  # trimesh raises many types for a bad file
-        raise SceneError(
-            f"{where}{path}: cannot read the mesh ({type(e).__name__}: {e})."
-        ) from None
-    v = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
-    f = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
-    if f.size == 0:
-        raise SceneError(f"{where}{path}: the file holds no triangles.")
-    return v.reshape(-1, 3), f.reshape(-1, 3)
-
-
-def load_mesh(path) -> TriangleMesh:
-    """Read a triangle mesh from an OBJ, PLY, STL, OFF or glTF file (through trimesh).
-
-    Polygons are triangulated by trimesh; vertices are kept as in the file (no merging or
-    reordering), so face indices match the file's.
-
-    **Arguments:**
-
-    - `path`: the mesh file. Vertex coordinates are in the file's length unit.
-
-    **Returns:**
-
-    A `TriangleMesh` (without materials). [file length unit]
-
-    **Raises:**
-
-    `FileNotFoundError` for a missing file, `SceneError` (a `ValueError`) naming the file when
-    it cannot be read or holds no triangles.
-
-    !!! note "Thesis"
-        Ch. 8 (scene geometry); file reading by trimesh (`Dawson-Haggerty2019`).
-    """
-    v, f = _read_mesh(Path(path), "")
-    return TriangleMesh(v, f.astype(np.int32))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -225,7 +183,7 @@ def _transform(ctx: _Ctx, node: _Node) -> np.ndarray:
                 raise ctx.err(op, "the rotation axis is zero") from None
         elif op.tag == "lookat":
             try:
-                t = _look_at(
+                t = look_at_matrix(
                     ctx.floats(op, ctx.attr(op, "origin"), 3),
                     ctx.floats(op, ctx.attr(op, "target"), 3),
                     ctx.floats(op, ctx.attr(op, "up", "0, 1, 0"), 3),
@@ -238,40 +196,42 @@ def _transform(ctx: _Ctx, node: _Node) -> np.ndarray:
     return m
 
 
-def _spectrum_value(ctx: _Ctx, node: _Node) -> dict:
-    """rgb / spectrum / blackbody / float property -> a spectral parameter dict."""
+def _spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
+    """rgb / spectrum / blackbody / float property -> a typed spectral value."""
     if node.tag == "rgb":
         text = ctx.attr(node, "value").strip()
         if text.startswith("#") and len(text) == 7:
             srgb = np.array([int(text[i : i + 2], 16) / 255.0 for i in (1, 3, 5)])
             lin = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
-            return {"rgb": lin}
-        return {"rgb": ctx.floats(node, text, 3)}
+            return LinearRGB(lin)
+        return LinearRGB(ctx.floats(node, text, 3))
     if node.tag == "float":
-        return {"value": float(ctx.floats(node, ctx.attr(node, "value"), 1)[0])}
+        return float(ctx.floats(node, ctx.attr(node, "value"), 1)[0])
     if node.tag == "blackbody":  # Mitsuba 0.6
         temp = ctx.attr(node, "temperature").strip().rstrip("Kk")
         scale = ctx.attr(node, "scale", "1")
         t = float(ctx.floats(node, temp, 1)[0])
         if t <= 0:
             raise ctx.err(node, f"temperature must be > 0 [K], got {t}")
-        return {"blackbody": {"temperature": t, "scale": float(ctx.floats(node, scale, 1)[0])}}
+        return BlackbodySpectrum(t, float(ctx.floats(node, scale, 1)[0]))
     if node.tag == "spectrum":
         kind = ctx.attr(node, "type", "")
         if kind == "blackbody":
             props = _properties(ctx, node, {"temperature", "scale"})
-            t = props.get("temperature", {}).get("value")
-            if t is None or t <= 0:
+            t = props.get("temperature")
+            if not isinstance(t, float) or t <= 0:
                 raise ctx.err(node, "a blackbody spectrum needs a temperature > 0 [K]")
-            scale = props.get("scale", {"value": 1.0})["value"]
-            return {"blackbody": {"temperature": t, "scale": scale}}
+            scale = props.get("scale", 1.0)
+            if not isinstance(scale, float):
+                raise ctx.err(node, f"a blackbody scale must be a number, got {scale!r}")
+            return BlackbodySpectrum(t, scale)
         if kind:
             raise ctx.err(node, f"unsupported spectrum type {kind!r} (line {node.line})")
         if "filename" in node.attrib:
             raise ctx.err(node, "spectrum files are not supported; give value='l1:v1, ...'")
         text = ctx.attr(node, "value")
         if ":" not in text:
-            return {"value": float(ctx.floats(node, text, 1)[0])}
+            return float(ctx.floats(node, text, 1)[0])
         pairs = [p.split(":") for p in text.replace(",", " ").split()]
         try:
             wl = np.array([float(a) for a, _ in pairs])
@@ -280,7 +240,7 @@ def _spectrum_value(ctx: _Ctx, node: _Node) -> dict:
             raise ctx.err(node, f"expected 'wavelength:value' pairs, got {text!r}") from None
         if len(wl) < 2 or np.any(np.diff(wl) <= 0):
             raise ctx.err(node, "expected >= 2 strictly increasing wavelengths [nm]")
-        return {"spectrum": (wl, val)}
+        return PiecewiseLinearSpectrum(wl, val)
     if node.tag == "texture":
         raise ctx.err(node, f"textures are not supported (line {node.line})")
     raise ctx.err(node, f"expected a spectrum (rgb, spectrum, float), got <{node.tag}>")
@@ -327,15 +287,6 @@ def _properties(ctx: _Ctx, node: _Node, allowed: set[str]) -> dict:
 # ---------------------------------------------------------------------------------------------
 # Plugins
 
-_BSDF_PARAMS = {
-    "diffuse": {"reflectance"},
-    "conductor": {"material", "eta", "k", "specular_reflectance"},
-    "roughconductor": {"material", "eta", "k", "specular_reflectance", "distribution", "alpha",
-                       "alpha_u", "alpha_v", "sample_visible"},
-    "dielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"},
-    "roughdielectric": {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
-                        "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"},
-}  # fmt: skip
 _FILTER_PARAMS = {
     "box": {"radius"},
     "tent": {"radius"},
@@ -374,32 +325,28 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
         m = materials[idx]
         materials[idx] = Material(m.type, m.params, two_sided=True, name=name)
         return idx
-    if kind not in _BSDF_PARAMS:
+    if kind not in MATERIALS:
         raise ctx.err(
             node, f"unsupported BSDF type '{kind}' (line {node.line}); supported: "
-            f"{sorted([*_BSDF_PARAMS, 'twosided'])}"
+            f"{sorted([*MATERIALS, 'twosided'])}"
         )  # fmt: skip
     _only_children(ctx, node, set())
-    params = _properties(ctx, node, _BSDF_PARAMS[kind])
+    params = _properties(ctx, node, set(MATERIALS[kind].PARAMETERS))
     if kind == "diffuse" and "reflectance" not in params:
-        params["reflectance"] = {"value": 0.5}
-    for key in ("int_ior", "ext_ior"):
-        v = params.get(key)
-        if isinstance(v, str):
-            params[key] = {"name": v}
+        params["reflectance"] = 0.5
     materials.append(Material(kind, params, two_sided=False, name=name))
     return len(materials) - 1
 
 
 def _emitter(ctx: _Ctx, node: _Node) -> dict:
     kind = ctx.attr(node, "type")
-    if kind != "area":
+    if kind not in LIGHTS:
         raise ctx.err(
-            node, f"unsupported emitter type '{kind}' (line {node.line}); only 'area' emitters "
-            "inside a <shape> are supported"
+            node, f"unsupported emitter type '{kind}' (line {node.line}); only "
+            f"{sorted(LIGHTS)} emitters inside a <shape> are supported"
         )  # fmt: skip
     _only_children(ctx, node, set())
-    props = _properties(ctx, node, {"radiance"})
+    props = _properties(ctx, node, set(LIGHTS[kind].PARAMETERS))
     if "radiance" not in props:
         raise ctx.err(node, "an area emitter needs a 'radiance'")
     return {"radiance": props["radiance"], "two_sided": False}
@@ -424,7 +371,7 @@ _SHAPE_PARAMS = {
 }
 
 
-def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> _Shape:
+def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> ShapeDescription:
     kind = ctx.attr(node, "type")
     if kind not in _SHAPE_PARAMS:
         raise ctx.err(
@@ -440,17 +387,17 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> _
         path = Path(props["filename"])
         if not path.is_absolute():
             path = ctx.base / path
-        v, f = _read_mesh(path, f"{ctx.file}:{node.line}: ")
+        v, f = read_mesh(path, f"{ctx.file}:{node.line}: ")
     elif kind == "rectangle":
         v, f = _RECT_V.copy(), _RECT_F.copy()
     elif kind == "cube":
         v, f = _CUBE_V.copy(), _CUBE_F.copy()
     else:
         v, f = icosphere(SPHERE_SUBDIVISIONS)
-        radius = props.get("radius", {"value": 1.0})
-        if "value" not in radius or radius["value"] <= 0:
+        radius = props.get("radius", 1.0)
+        if not isinstance(radius, float) or radius <= 0:
             raise ctx.err(node, "the sphere 'radius' must be a float > 0")
-        v = v * radius["value"] + props.get("center", np.zeros(3))
+        v = v * radius + props.get("center", np.zeros(3))
     m = props.get("to_world", np.eye(4))
     v = v @ m[:3, :3].T + m[:3, 3]
     if props.get("flip_normals", False):
@@ -478,11 +425,11 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> _
             emitter = _emitter(ctx, ch)
     if material is None:  # Mitsuba's default: diffuse, reflectance 0.5
         if not default_material:
-            materials.append(Material("diffuse", {"reflectance": {"value": 0.5}}, name="default"))
+            materials.append(Material("diffuse", {"reflectance": 0.5}, name="default"))
             default_material.append(len(materials) - 1)
         material = default_material[0]
     name = node.attrib.get("id", f"{kind}@{node.line}")
-    return _Shape(name, v, f, material, emitter, where=where)
+    return ShapeDescription(name, v, f, material, emitter, where=where)
 
 
 def _sensor(ctx: _Ctx, node: _Node):
@@ -500,7 +447,7 @@ def _sensor(ctx: _Ctx, node: _Node):
     if axis not in ("x", "y", "diagonal", "smaller", "larger"):
         raise ctx.err(node, f"unknown fov_axis {axis!r}")
     if "fov" in props:
-        fov = props["fov"].get("value")
+        fov = props["fov"] if isinstance(props["fov"], float) else None
     else:
         f_mm = props.get("focal_length", "50mm").strip().removesuffix("mm")
         f_mm = float(ctx.floats(node, f_mm, 1)[0])
@@ -512,8 +459,8 @@ def _sensor(ctx: _Ctx, node: _Node):
         to_world=props.get("to_world", np.eye(4)),
         fov_deg=float(fov),
         fov_axis=axis,
-        near_clip=float(props.get("near_clip", {"value": 1e-2})["value"]),
-        far_clip=float(props.get("far_clip", {"value": 1e4})["value"]),
+        near_clip=float(props.get("near_clip", 1e-2)),
+        far_clip=float(props.get("far_clip", 1e4)),
     )
     film = FilmDescription(width=768, height=576)
     spp = None
@@ -549,7 +496,7 @@ def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
             _only_children(ctx, ch, set())
             p = _properties(ctx, ch, _FILTER_PARAMS[kind_f])
             params = dict(_FILTER_DEFAULTS[kind_f])
-            params.update({k: (v["value"] if isinstance(v, dict) else v) for k, v in p.items()})
+            params.update(p)
     if kind_f == "gaussian" and "radius" not in params:
         params["radius"] = 4.0 * params["stddev"]
     return FilmDescription(width=width, height=height, filter=kind_f, filter_params=params)
@@ -557,7 +504,7 @@ def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
 
 def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     """Load a Mitsuba 3 XML scene (the subset in the module docstring of
-    `radiometria.render._loaders`) into a `SceneDescription`.
+    `radiometria.render._scenes._mitsuba_xml`) into a `SceneDescription`.
 
     Meshes are transformed to world space and merged; each `bsdf` becomes a `Material` (a
     `ref` reuses the referenced one; a shape without one gets Mitsuba's default, diffuse 0.5);
@@ -599,12 +546,13 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         ctx.params[k] = v
     materials: list[Material] = []
     default_material: list[int] = []
-    shapes: list[_Shape] = []
+    shapes: list[ShapeDescription] = []
     camera = CameraDescription(to_world=np.eye(4), fov_deg=45.0, fov_axis="x")
     film = FilmDescription(width=768, height=576)
     spp = None
     max_depth: int | None = None
     rr_depth = 5
+    integrator = "path"
     for ch in root.children:
         if ch.tag == "default":
             continue
@@ -617,13 +565,18 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         elif ch.tag == "sensor":
             camera, film, spp = _sensor(ctx, ch)
         elif ch.tag == "integrator":
-            kind = ctx.attr(ch, "type")
-            if kind != "path":
+            integrator = ctx.attr(ch, "type")
+            if integrator not in INTEGRATORS:
                 raise ctx.err(
-                    ch, f"unsupported integrator type '{kind}' (line {ch.line}); only 'path'"
-                )
+                    ch, f"unsupported integrator type '{integrator}' (line {ch.line}); "
+                    f"supported: {sorted(INTEGRATORS)}"
+                )  # fmt: skip
             _only_children(ctx, ch, set())
-            p = _properties(ctx, ch, {"max_depth", "rr_depth", "hide_emitters"})
+            p = _properties(ctx, ch, set(INTEGRATORS[integrator].PARAMETERS))
+            try:
+                INTEGRATORS[integrator].from_properties(p, where=f"{file}:{ch.line}")
+            except ValueError as e:
+                raise SceneError(str(e)) from None
             md = p.get("max_depth", -1)
             if md == 0 or md < -1:
                 raise ctx.err(ch, f"max_depth must be -1 (unbounded) or >= 1, got {md}")
@@ -632,7 +585,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         else:
             what = f" type='{ch.attrib['type']}'" if "type" in ch.attrib else ""
             raise ctx.err(ch, f"unsupported tag <{ch.tag}{what}> at line {ch.line}")
-    return _assemble(
+    return assemble(
         shapes, materials, camera, film, max_depth=max_depth, rr_depth=rr_depth, spp=spp,
-        unit="file units", source=file,
+        integrator=integrator, unit="file units", source=file,
     )  # fmt: skip

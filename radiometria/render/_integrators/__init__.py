@@ -1,0 +1,13 @@
+"""Integrators of the renderer (thesis ch. 8-9): light-transport estimators, one per file.
+
+Each subclasses `AbstractIntegrator` (`_base.py`); the names scene files and the command line
+use are in `radiometria.render._registry.INTEGRATORS`.
+"""
+
+from ._base import AbstractIntegrator as AbstractIntegrator
+from ._direct import Direct as Direct
+from ._path import (
+    Path as Path,
+    path_radiance as path_radiance,
+    sample_dimensions as sample_dimensions,
+)

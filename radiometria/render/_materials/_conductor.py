@@ -1,0 +1,67 @@
+"""Mitsuba's `conductor` BSDF: a smooth metal (thesis eq. 3.13-3.18, complex index)."""
+
+from typing import ClassVar
+
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float, Int
+
+from ...scattering import ConductorBxDF
+from ...upsampling import RGBUnboundedSpectrum
+from .._spectral import SpectrumTable
+from .._textures import AbstractTexture, ConstantTexture
+from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
+from ._ior import conductor_ior
+
+
+def conductor_textures(params: Properties, where: str) -> tuple[ConstantTexture, ...]:
+    """`(eta, k, specular_reflectance)` textures of one conductor (Mitsuba's defaults)."""
+    eta, k = conductor_ior(params, where)
+    refl = ConstantTexture.from_values(
+        [params.get("specular_reflectance", 1.0)], RGBUnboundedSpectrum
+    )
+    table = lambda x: ConstantTexture(SpectrumTable(jnp.asarray(x[None], jnp.float32)))
+    return table(eta), table(k), refl
+
+
+def valid_ior(eta: Array, k: Array) -> tuple[Array, Array]:
+    """Keep the complex index inside the BxDF constructors' ranges (`eta > 0`, `k >= 0`)."""
+    return jnp.maximum(eta, 1e-3), jnp.maximum(k, 0.0)
+
+
+class Conductor(AbstractMaterial):
+    """Smooth conductors (Mitsuba's `conductor`): a mirror with the Fresnel reflectance of the
+    complex index `eta + i k`, times `specular_reflectance`.
+
+    **Fields:**
+
+    - `eta`, `k`: textures of the real and imaginary parts of the index, relative to the
+        outside (from `material`: `"none"`, the default, a perfect mirror; `"Au"`, `"Ag"`,
+        `"Cu"`, `"Al"`: measured tables; or given as spectra). [1]
+    - `specular_reflectance`: texture of a factor on the reflectance (default 1). [1]
+    - `two_sided`: `(m,)` bool.
+
+    !!! note "Thesis"
+        Eq. 3.13-3.18 (Fresnel equations), footnote 18 (complex index of a conductor).
+
+    ??? cite "References"
+        `Jakob2022` (`conductor`); `Pharr2023` §9.4.
+    """
+
+    NAME: ClassVar[str] = "conductor"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
+        {"material", "eta", "k", "specular_reflectance"}
+    )
+    eta: AbstractTexture
+    k: AbstractTexture
+    specular_reflectance: AbstractTexture
+    two_sided: Bool[Array, " m"]
+
+    @classmethod
+    def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
+        unknown_parameters(params, cls, where)
+        return cls(*conductor_textures(params, where), jnp.asarray([two_sided], bool))
+
+    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
+        refl = self.specular_reflectance(row, wavelength_nm)
+        eta, k = valid_ior(self.eta(row, wavelength_nm), self.k(row, wavelength_nm))
+        return ScaledBxDF(ConductorBxDF(eta, k), refl, refl)

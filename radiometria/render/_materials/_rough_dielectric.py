@@ -1,0 +1,60 @@
+"""Mitsuba's `roughdielectric` BSDF: a microfacet dielectric interface (thesis ch. 3)."""
+
+from typing import ClassVar
+
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float, Int
+
+from ...scattering import RoughDielectricBxDF
+from .._textures import AbstractTexture
+from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
+from ._dielectric import dielectric_textures
+from ._rough_conductor import roughness
+
+
+class RoughDielectric(AbstractMaterial):
+    """Rough dielectric interfaces (Mitsuba's `roughdielectric`) with the Trowbridge-Reitz
+    (GGX) distribution whatever the scene's `distribution` says (as `RoughConductor`).
+
+    **Fields:**
+
+    - `eta`, `specular_reflectance`, `specular_transmittance`: as `Dielectric`. [1]
+    - `alpha_u`, `alpha_v`: `(m,)` roughness (default `alpha` = 0.1). [1]
+    - `two_sided`: `(m,)` bool.
+
+    !!! note "Thesis"
+        Chapter 3 (glossy transmission), eq. 3.13-3.18.
+
+    ??? cite "References"
+        `Walter2007`; `Jakob2022` (`roughdielectric`); `Pharr2023` §9.7.
+    """
+
+    NAME: ClassVar[str] = "roughdielectric"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
+        {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
+         "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"}
+    )  # fmt: skip
+    TRANSMISSIVE: ClassVar[bool] = True
+    eta: AbstractTexture
+    specular_reflectance: AbstractTexture
+    specular_transmittance: AbstractTexture
+    alpha_u: Float[Array, " m"]
+    alpha_v: Float[Array, " m"]
+    two_sided: Bool[Array, " m"]
+
+    @classmethod
+    def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
+        unknown_parameters(params, cls, where)
+        return cls(
+            *dielectric_textures(params, where),
+            *roughness(params, where),
+            jnp.asarray([two_sided], bool),
+        )
+
+    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
+        eta = jnp.maximum(self.eta(row, wavelength_nm), 1e-3)
+        return ScaledBxDF(
+            RoughDielectricBxDF(self.alpha_u[row], eta, self.alpha_v[row]),
+            self.specular_reflectance(row, wavelength_nm),
+            self.specular_transmittance(row, wavelength_nm),
+        )

@@ -1,0 +1,114 @@
+"""The materials of a scene: one plugin per kind present, and the BxDF of each path's material."""
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Bool, Int
+
+from ...scattering import AbstractBxDF, BSDFSample
+from ._base import AbstractMaterial, concatenate
+
+__all__ = ["MaterialSet"]
+
+
+class MaterialSet(eqx.Module):
+    """A scene's `m` materials, grouped by kind into one plugin each.
+
+    Build it with `MaterialSet.from_materials([...])` from material plugins (each of one or
+    more rows), in the order of the scene's material indices.
+
+    **Fields:**
+
+    - `plugins`: one `AbstractMaterial` per kind present, holding that kind's materials.
+    - `plugin_of`, `row_of`: `(m,)` int32, the plugin and the row of each material.
+    - `two_sided`: `(m,)` bool, materials that scatter on both sides.
+    - `transmissive`: `(m,)` bool, materials that transmit (both sides bound a medium).
+
+    At a hit, `bxdf(material, wavelength_nm)` is the plugin's own BxDF when the scene has one
+    kind; otherwise every kind's BxDF is evaluated and each path takes its own (`where`), the
+    usual way to vectorise a mixture of kinds.
+
+    !!! note "Thesis"
+        Chapter 3 (BSDFs, eq. 3.4).
+    """
+
+    plugins: tuple[AbstractMaterial, ...]
+    plugin_of: Int[Array, " m"]
+    row_of: Int[Array, " m"]
+    two_sided: Bool[Array, " m"]
+    transmissive: Bool[Array, " m"]
+    identity_rows: bool = eqx.field(static=True)
+
+    @classmethod
+    def from_materials(cls, materials: "list[AbstractMaterial]") -> "MaterialSet":
+        """Group material plugins by kind (NumPy work, outside `jit`)."""
+        if not materials:
+            raise ValueError("a scene needs at least one material.")
+        kinds: list[type] = []
+        groups: dict[type, list[AbstractMaterial]] = {}
+        plugin_of, row_of, transmissive = [], [], []
+        for m in materials:
+            if not isinstance(m, AbstractMaterial):
+                raise TypeError(f"materials must be AbstractMaterial plugins, got {type(m)}.")
+            kind = type(m)
+            if kind not in groups:
+                kinds.append(kind)
+                groups[kind] = []
+            first = sum(g.n_rows for g in groups[kind])
+            groups[kind].append(m)
+            plugin_of += [kinds.index(kind)] * m.n_rows
+            row_of += list(range(first, first + m.n_rows))
+            transmissive += [kind.TRANSMISSIVE] * m.n_rows
+        plugins = tuple(concatenate(groups[k]) for k in kinds)
+        two_sided = jnp.concatenate([jnp.asarray(m.two_sided, bool) for m in materials])
+        return cls(
+            plugins=plugins,
+            plugin_of=jnp.asarray(plugin_of, jnp.int32),
+            row_of=jnp.asarray(row_of, jnp.int32),
+            two_sided=two_sided,
+            transmissive=jnp.asarray(transmissive, bool),
+            identity_rows=len(plugins) == 1 and bool(np.all(np.diff(row_of) == 1)),
+        )
+
+    @property
+    def n_materials(self) -> int:
+        """Number of materials `m`."""
+        return int(self.plugin_of.shape[0])
+
+    def bxdf(self, material: Int[Array, " n"], wavelength_nm) -> AbstractBxDF:
+        """The BxDF of each path's material at its wavelengths (`(n,)`, `(n, k)` [nm])."""
+        rows = material if self.identity_rows else self.row_of[material]
+        if len(self.plugins) == 1:
+            return self.plugins[0].bxdf(rows, wavelength_nm)
+        parts = tuple(p.bxdf(rows, wavelength_nm) for p in self.plugins)
+        return _Mixture(self.plugin_of[material], parts)
+
+
+class _Mixture(AbstractBxDF):
+    """The BxDFs of several material kinds, one chosen per path by `plugin` (`where` selects)."""
+
+    plugin: Array  # (n,) index into `parts`
+    parts: tuple
+
+    def _pick(self, values):
+        out = values[0]
+        for i, v in enumerate(values[1:], start=1):
+            mask = (self.plugin == i).reshape(self.plugin.shape + (1,) * (v.ndim - 1))
+            out = jnp.where(mask, v, out)
+        return out
+
+    def f(self, wo, wi, *, mode: str = "radiance"):
+        return self._pick([b.f(wo, wi, mode=mode) for b in self.parts])
+
+    def pdf(self, wo, wi):
+        return self._pick([b.pdf(wo, wi) for b in self.parts])
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        samples = [b.sample_f(wo, u_lobe, u2, mode=mode) for b in self.parts]
+        return BSDFSample(
+            **{
+                name: self._pick([getattr(s, name) for s in samples])
+                for name in ("f", "wi", "pdf", "is_delta", "is_transmission", "eta",
+                             "terminate_secondary")
+            }
+        )  # fmt: skip

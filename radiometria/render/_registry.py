@@ -1,0 +1,68 @@
+"""The renderer's registries: the names scene files and the command line use, mapped to plugins.
+
+Strings name plugins only at the outer boundary (scene files, command-line flags); inside the
+library every plugin is an object. Each registry maps a name to a plugin class, so adding a
+plugin is one new file (a subclass of the abstract class of its folder) plus one line here.
+"""
+
+from ..camera import (
+    BoxFilter,
+    GaussianFilter,
+    LanczosFilter,
+    MitchellFilter,
+    PinholeCamera,
+    TentFilter,
+)
+from ._accelerators import BruteForceAccelerator, BVHAccelerator
+from ._integrators import Direct, Path
+from ._lights import AreaLight
+from ._materials import (
+    Conductor,
+    Dielectric,
+    Diffuse,
+    OrenNayar,
+    RoughConductor,
+    RoughDielectric,
+)
+from ._samplers import Independent, OwenSobol
+from ._textures import ConstantTexture
+
+__all__ = [
+    "ACCELERATORS",
+    "CAMERAS",
+    "FILTERS",
+    "INTEGRATORS",
+    "LIGHTS",
+    "MATERIALS",
+    "SAMPLERS",
+    "TEXTURES",
+]
+
+
+def _by_name(*plugins) -> dict:
+    return {p.NAME: p for p in plugins}
+
+
+# Mitsuba 3's `<bsdf type=...>` names.
+MATERIALS = _by_name(Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric)
+# Mitsuba 3's `<emitter type=...>` names.
+LIGHTS = _by_name(AreaLight)
+# Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
+INTEGRATORS = _by_name(Path, Direct)
+# `radiometria render --sampler`.
+SAMPLERS = _by_name(Independent, OwenSobol)
+# Spectral values of scene files are constant textures until textures arrive (scene format).
+TEXTURES = {"constant": ConstantTexture}
+# Mitsuba 3's `<sensor type=...>` names.
+CAMERAS = {"perspective": PinholeCamera}
+# Mitsuba 3's `<rfilter type=...>` names (`catmullrom` is Mitchell-Netravali with B=0, C=1/2).
+FILTERS = {
+    "box": BoxFilter,
+    "tent": TentFilter,
+    "gaussian": GaussianFilter,
+    "mitchell": MitchellFilter,
+    "catmullrom": MitchellFilter,
+    "lanczos": LanczosFilter,
+}
+# `RenderScene.from_triangles(accelerator=...)`; "auto" picks brute force for tiny scenes.
+ACCELERATORS = {"brute_force": BruteForceAccelerator, "bvh": BVHAccelerator}

@@ -1,0 +1,115 @@
+"""From a scene description to the renderer's plugins (thesis ch. 8; section 2.3)."""
+
+import numpy as np
+
+from ...camera import AbstractFilter, PinholeCamera
+from .._integrators import AbstractIntegrator
+from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
+from .._lights import AreaLight
+from .._registry import FILTERS, INTEGRATORS, MATERIALS
+from .._render_scene import RenderScene
+from ._description import SceneDescription, SceneError
+
+__all__ = ["compile_scene", "scene_filter", "scene_integrator"]
+
+# Each filter's parameters in Mitsuba's names, with Mitsuba's defaults (the Gaussian's radius
+# defaults to 4 standard deviations in the filter itself); `catmullrom` is Mitchell B=0, C=1/2.
+_FILTER_ARGS = {
+    "box": (("radius", 0.5),),
+    "tent": (("radius", 1.0),),
+    "gaussian": (("stddev", 0.5), ("radius", None)),
+    "mitchell": (("B", 1.0 / 3.0), ("C", 1.0 / 3.0), ("radius", 2.0)),
+    "catmullrom": (("B", 0.0), ("C", 0.5), ("radius", 2.0)),
+    "lanczos": (("lobes", 3.0), ("radius", None)),
+}
+
+
+def scene_filter(description: SceneDescription) -> AbstractFilter:
+    """The reconstruction filter of the scene's film (`FILTERS` registry, thesis 2.3.2)."""
+    film = description.film
+    if film.filter not in FILTERS:
+        raise SceneError(
+            f"{description.source or 'scene'}: unsupported reconstruction filter "
+            f"{film.filter!r}; supported: {sorted(FILTERS)}."
+        )
+    p = dict(film.filter_params)
+    if film.filter == "lanczos" and "tau" in p:  # Mitsuba 0.6's name for the lobes
+        p.setdefault("lobes", p.pop("tau"))
+    args = [p.get(name, default) for name, default in _FILTER_ARGS[film.filter]]
+    return FILTERS[film.filter](*args)
+
+
+def scene_integrator(description: SceneDescription) -> AbstractIntegrator:
+    """The integrator the scene file asks for (`INTEGRATORS` registry), with its settings."""
+    depth = description.max_depth
+    params = {
+        "max_depth": DEFAULT_UNBOUNDED_DEPTH if depth is None else depth,
+        "rr_depth": description.rr_depth,
+    }
+    cls = INTEGRATORS[description.integrator]
+    params = {k: v for k, v in params.items() if k in cls.PARAMETERS}
+    return cls.from_properties(params, where=description.source or "scene")
+
+
+def compile_scene(
+    description: SceneDescription, *, width=None, height=None, accelerator="auto"
+) -> tuple[RenderScene, PinholeCamera, AbstractFilter]:
+    """Turn a loaded scene (`load_scene`) into `(RenderScene, PinholeCamera, filter)`.
+
+    Each material's `type` names its plugin in the `MATERIALS` registry, which reads the
+    material's parameters (`from_properties`); their spectra and the emitters' are tabulated
+    on the renderer's 1 nm grid: RGB reflectances as bounded sigmoid-polynomial spectra, RGB
+    radiances as illuminant spectra (x D65 with Y = 1), measured and blackbody spectra as
+    given. The camera keeps its field of view along its `fov_axis` when `width`/`height`
+    override the film's size. `scene_integrator` gives the integrator the file asks for.
+
+    **Arguments:**
+
+    - `description`: a `SceneDescription`.
+    - `width`, `height`: image size [px]; default: the scene's film.
+    - `accelerator`: as in `RenderScene.from_triangles`.
+
+    **Returns:**
+
+    `(scene, camera, rfilter)`.
+
+    !!! note "Thesis"
+        Chapter 8 (scenes); section 2.3 (camera and filter); section 2.2.3 (RGB to spectra).
+
+    ??? cite "References"
+        `Jakob2022` (Mitsuba 3's scene conventions).
+    """
+    where = description.source or "scene"
+    materials = []
+    for m in description.materials:
+        if m.type not in MATERIALS:
+            raise ValueError(
+                f"{where}: material {m.name!r} has type {m.type!r}; supported: "
+                f"{', '.join(MATERIALS)}."
+            )
+        what = f"{where}: material {m.name!r}"
+        materials.append(
+            MATERIALS[m.type].from_properties(m.params, two_sided=m.two_sided, where=what)
+        )
+    radiance = AreaLight.radiance_texture([e.radiance for e in description.emitters])
+    scene = RenderScene.from_triangles(
+        description.vertices,
+        description.faces,
+        description.face_material,
+        materials,
+        description.face_emitter,
+        radiance,
+        emitter_two_sided=[e.two_sided for e in description.emitters],
+        accelerator=accelerator,
+    )
+    cam = description.camera
+    camera = PinholeCamera.from_to_world(
+        np.asarray(cam.to_world, np.float64),
+        float(cam.fov_deg),
+        description.film.width if width is None else width,
+        description.film.height if height is None else height,
+        cam.fov_axis,
+        near_clip=cam.near_clip,
+        far_clip=cam.far_clip,
+    )
+    return scene, camera, scene_filter(description)

@@ -1,0 +1,348 @@
+"""Scene descriptions: what a scene file says, as plain frozen dataclasses (thesis ch. 8).
+
+A `SceneDescription` is the offline, NumPy form of a scene: every shape merged into one
+triangle array with a material index and an emitter index per triangle, the materials and
+emitters with their parameters as the file gives them, the camera, the film and the
+integrator settings. `compile_scene` turns it into the renderer's plugins (`RenderScene`,
+camera, filter, integrator); nothing here touches JAX.
+
+Parameters are kept as a file gives them (Mitsuba 3's `Properties`): numbers, strings, and
+spectral values as typed objects, never as dicts: a `LinearRGB` triple (whose spectrum the
+receiving plugin chooses: albedo, unbounded or illuminant, thesis 2.2.3), a
+`radiometria.radiometry.PiecewiseLinearSpectrum` (tabulated, linear in between and zero
+outside: the Cornell measurements' convention) or a `BlackbodySpectrum` (thesis eq. 1.24).
+
+Degenerate triangles (zero area in float64) are dropped from ordinary shapes, and are an
+error in an emitter (a light must have a positive area on every triangle).
+"""
+
+import dataclasses
+
+import numpy as np
+
+from ...camera import look_at as camera_look_at
+from .._geometry._mesh import TriangleMesh, _areas, validate_triangles
+from .._spectral import SpectralValue
+
+__all__ = [
+    "AreaEmitter",
+    "CameraDescription",
+    "FilmDescription",
+    "Material",
+    "SceneDescription",
+    "SceneError",
+]
+
+FOV_AXES = ("x", "y", "diagonal", "smaller", "larger")
+
+
+class SceneError(ValueError):
+    """A scene file or scene description is invalid; the message names the file and the line
+    or field (thesis ch. 8: scene input)."""
+
+    def __init__(self, message: str):
+        super().__init__(message)
+
+
+@dataclasses.dataclass(frozen=True)
+class Material:
+    """A surface material: a Mitsuba-style BSDF type and its parameters (thesis ch. 3 and 8).
+
+    **Fields:**
+
+    - `type`: the BSDF plugin's name, a key of `radiometria.render._registry.MATERIALS`
+        (`"diffuse"`, `"conductor"`, `"roughconductor"`, `"dielectric"`, ...).
+    - `params`: parameter name -> value as the file gives it: spectral values as typed
+        objects (module docstring; e.g. `{"reflectance": LinearRGB([0.5, 0.5, 0.5])}`),
+        scalars (`alpha`) as numbers, names (`distribution`, `material`, a named `int_ior`)
+        as `str`.
+    - `two_sided`: scatter on both sides (Mitsuba's `twosided` wrapper); else only on the side
+        the triangle normal points to, black from behind. [bool]
+    - `name`: the id in the file, or a generated name.
+
+    !!! note "Thesis"
+        Ch. 3 (BSDFs), parameters as in Mitsuba 3 (`Jakob2022`).
+    """
+
+    type: str
+    params: dict
+    two_sided: bool = False
+    name: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
+class AreaEmitter:
+    """A diffuse area light on a set of triangles of the merged mesh (thesis ch. 8).
+
+    **Fields:**
+
+    - `radiance`: emitted radiance, a spectral value of the module docstring (an RGB triple
+        is an illuminant spectrum). [W m^-2 sr^-1 nm^-1, or the file's relative unit]
+    - `triangles`: `(k,)` int32 indices into `SceneDescription.faces`.
+    - `areas`: `(k,)` areas of those triangles. [scene length unit^2]
+    - `total_area`: their sum. [scene length unit^2]
+    - `two_sided`: emit on both sides (default: only on the side of the triangle normal).
+    - `name`: the shape's name.
+
+    !!! note "Thesis"
+        Ch. 8 (emitters; area lights are sampled uniformly by area, `Pharr2023` §12.2).
+    """
+
+    radiance: SpectralValue
+    triangles: np.ndarray
+    areas: np.ndarray
+    total_area: float
+    two_sided: bool = False
+    name: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
+class CameraDescription:
+    """A pinhole (perspective) camera in Mitsuba's convention (thesis section 2.3.1).
+
+    Camera space looks along +z with +y up and +x to the left of the image; `to_world` maps
+    camera space to world space (its last column is the camera position).
+
+    **Fields:**
+
+    - `to_world`: `(4, 4)` float64 camera-to-world matrix. [scene length unit]
+    - `fov_deg`: field of view along `fov_axis`. [degrees]
+    - `fov_axis`: `"x"`, `"y"`, `"diagonal"`, `"smaller"` or `"larger"` (Mitsuba's names).
+    - `near_clip`, `far_clip`: clip distances. [scene length unit]
+
+    !!! note "Thesis"
+        Section 2.3.1 (pinhole camera model); Mitsuba's `perspective` sensor (`Jakob2022`).
+    """
+
+    to_world: np.ndarray
+    fov_deg: float
+    fov_axis: str = "x"
+    near_clip: float = 1e-2
+    far_clip: float = 1e4
+
+    @property
+    def origin(self) -> np.ndarray:
+        """Camera position `(3,)`. [scene length unit]"""
+        return np.asarray(self.to_world)[:3, 3]
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit viewing direction `(3,)` (camera +z in world space)."""
+        d = np.asarray(self.to_world)[:3, 2]
+        return d / np.linalg.norm(d)
+
+    @property
+    def up(self) -> np.ndarray:
+        """Unit up vector `(3,)` (camera +y in world space)."""
+        u = np.asarray(self.to_world)[:3, 1]
+        return u / np.linalg.norm(u)
+
+
+@dataclasses.dataclass(frozen=True)
+class FilmDescription:
+    """Image size and reconstruction filter (thesis section 2.3.2).
+
+    **Fields:**
+
+    - `width`, `height`: image size. [px]
+    - `filter`: filter type: `"box"`, `"tent"`, `"gaussian"`, `"mitchell"`,
+        `"catmullrom"` or `"lanczos"` (Mitsuba's names).
+    - `filter_params`: e.g. `{"stddev": 0.5, "radius": 2.0}` for the Gaussian. [px]
+
+    !!! note "Thesis"
+        Section 2.3.2 (filtering image samples); Mitsuba's `hdrfilm` (`Jakob2022`).
+    """
+
+    width: int
+    height: int
+    filter: str = "gaussian"
+    filter_params: dict = dataclasses.field(default_factory=lambda: {"stddev": 0.5, "radius": 2.0})
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneDescription:
+    """A whole scene as NumPy arrays and plain Python values (thesis ch. 8).
+
+    **Fields:**
+
+    - `vertices`: `(v, 3)` float64 positions of all shapes. [scene length unit]
+    - `faces`: `(f, 3)` int32 triangles (no degenerate ones).
+    - `face_material`: `(f,)` int32 index into `materials`.
+    - `face_emitter`: `(f,)` int32 index into `emitters`, -1 for a non-emissive triangle.
+    - `face_shape`: `(f,)` int32 index into `shape_names`.
+    - `materials`: tuple of `Material`.
+    - `emitters`: tuple of `AreaEmitter`.
+    - `camera`: `CameraDescription`.
+    - `film`: `FilmDescription`.
+    - `integrator`: the integrator plugin's name, a key of
+        `radiometria.render._registry.INTEGRATORS` (`"path"`, `"direct"`).
+    - `max_depth`: the path tracer's maximum number of path segments (Mitsuba's meaning: 1 =
+        emitters seen directly, 2 = direct illumination), or `None` when the file leaves it
+        unbounded or unset.
+    - `rr_depth`: depth at which Russian roulette starts (Mitsuba's `rr_depth`).
+    - `spp`: samples per pixel the file asks for, or `None`.
+    - `shape_names`: tuple of shape names.
+    - `unit`: the length unit of the coordinates (e.g. `"mm"`), as a string.
+    - `source`: where the scene came from (built-in name or path).
+
+    !!! note "Thesis"
+        Ch. 8 (scene description for light transport); file formats of Mitsuba 3
+        (`Jakob2022`).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_material: np.ndarray
+    face_emitter: np.ndarray
+    face_shape: np.ndarray
+    materials: tuple
+    emitters: tuple
+    camera: CameraDescription
+    film: FilmDescription
+    max_depth: int | None = 8
+    rr_depth: int = 5
+    spp: int | None = None
+    integrator: str = "path"
+    shape_names: tuple = ()
+    unit: str = "scene units"
+    source: str = ""
+
+    def __post_init__(self):
+        f = np.asarray(self.faces)
+        n = len(f)
+        where = self.source or "scene"
+        if f.ndim != 2 or f.shape[1] != 3:
+            raise SceneError(f"{where}: faces must have shape (f, 3), got {f.shape}.")
+        for name in ("face_material", "face_emitter", "face_shape"):
+            a = np.asarray(getattr(self, name))
+            if a.shape != (n,):
+                raise SceneError(f"{where}: {name} must have shape ({n},), got {a.shape}.")
+        fm = np.asarray(self.face_material)
+        if n and (fm.min() < 0 or fm.max() >= len(self.materials)):
+            raise SceneError(
+                f"{where}: face_material must index the {len(self.materials)} materials."
+            )
+        fe = np.asarray(self.face_emitter)
+        if n and (fe.min() < -1 or fe.max() >= len(self.emitters)):
+            raise SceneError(
+                f"{where}: face_emitter must be -1 or index the {len(self.emitters)} emitters."
+            )
+
+    @property
+    def n_triangles(self) -> int:
+        """Number of triangles."""
+        return int(len(self.faces))
+
+    @property
+    def mesh(self) -> TriangleMesh:
+        """The merged geometry as a `TriangleMesh` with per-face material indices."""
+        return TriangleMesh(self.vertices, self.faces, self.face_material)
+
+    @property
+    def emissive_triangles(self) -> np.ndarray:
+        """Indices `(l,)` of all emissive triangles, in emitter order."""
+        if not self.emitters:
+            return np.zeros(0, np.int32)
+        return np.concatenate([e.triangles for e in self.emitters]).astype(np.int32)
+
+
+# ---------------------------------------------------------------------------------------------
+# Assembly shared by the JSON and Mitsuba loaders
+
+
+@dataclasses.dataclass
+class ShapeDescription:
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    material: int
+    emitter: dict | None = None  # {"radiance": SpectralValue, "two_sided": bool}
+    where: str = ""
+
+
+def assemble(
+    shapes: list[ShapeDescription],
+    materials: list[Material],
+    camera: CameraDescription,
+    film: FilmDescription,
+    *,
+    max_depth: int | None,
+    rr_depth: int = 5,
+    spp: int | None = None,
+    integrator: str = "path",
+    unit: str = "scene units",
+    source: str = "",
+) -> SceneDescription:
+    """Validate the shapes (degenerate rule), merge them and build the emitters."""
+    all_v, all_f, mat, emi, owner, emitters = [], [], [], [], [], []
+    offset = 0
+    n_faces = 0
+    for si, sh in enumerate(shapes):
+        v = np.asarray(sh.vertices, dtype=np.float64).reshape(-1, 3)
+        f = np.asarray(sh.faces).reshape(-1, 3)
+        try:
+            keep = validate_triangles(
+                v, f, where=sh.where or sh.name, degenerate="error" if sh.emitter else "drop"
+            )
+        except ValueError as e:
+            raise SceneError(str(e)) from None
+        f = f[keep].astype(np.int64)
+        all_v.append(v)
+        all_f.append(f + offset)
+        mat.append(np.full(len(f), sh.material, np.int32))
+        owner.append(np.full(len(f), si, np.int32))
+        if sh.emitter is not None:
+            if len(f) == 0:
+                raise SceneError(f"{sh.where or sh.name}: an emitter needs at least one triangle.")
+            tri = np.arange(n_faces, n_faces + len(f), dtype=np.int32)
+            areas = _areas(np, v, f)
+            emi.append(np.full(len(f), len(emitters), np.int32))
+            emitters.append(
+                AreaEmitter(
+                    radiance=sh.emitter["radiance"],
+                    triangles=tri,
+                    areas=areas,
+                    total_area=float(areas.sum()),
+                    two_sided=bool(sh.emitter.get("two_sided", False)),
+                    name=sh.name,
+                )
+            )
+        else:
+            emi.append(np.full(len(f), -1, np.int32))
+        offset += len(v)
+        n_faces += len(f)
+    cat = lambda xs, shape, dt: np.concatenate(xs).astype(dt) if xs else np.zeros(shape, dt)
+    return SceneDescription(
+        vertices=cat(all_v, (0, 3), np.float64),
+        faces=cat(all_f, (0, 3), np.int32),
+        face_material=cat(mat, (0,), np.int32),
+        face_emitter=cat(emi, (0,), np.int32),
+        face_shape=cat(owner, (0,), np.int32),
+        materials=tuple(materials),
+        emitters=tuple(emitters),
+        camera=camera,
+        film=film,
+        max_depth=max_depth,
+        rr_depth=rr_depth,
+        spp=spp,
+        integrator=integrator,
+        shape_names=tuple(s.name for s in shapes),
+        unit=unit,
+        source=source,
+    )
+
+
+def look_at_matrix(origin, target, up) -> np.ndarray:
+    """`radiometria.camera.look_at` as a float64 NumPy matrix, for the offline scene loaders.
+
+    Degenerate input (target equal to origin, up parallel to the view) raises `ValueError`.
+    """
+    o, t, u = (np.asarray(v, dtype=np.float64).reshape(3) for v in (origin, target, up))
+    d = t - o
+    if not np.any(d) or not np.any(np.cross(u, d)):
+        raise ValueError("look_at: `target` equals `origin` or `up` is parallel to the view.")
+    return np.asarray(camera_look_at(o, t, u), dtype=np.float64)
+
+
+# ---------------------------------------------------------------------------------------------
+# Our JSON format (the schema of data/cornell_box.json and data/cornell_box_measured.json)
