@@ -1,7 +1,8 @@
 """Validation helpers for the three error tiers of style.md section 9.
 
 - *static* checks (`as_float_array`, `check_choice`, `check_last_axis`, `check_broadcastable`,
-  `check_positive_int`) raise `TypeError`/`ValueError` at call or trace time;
+  `check_positive_int`, `check_axis`, `check_wavelength_grid`) raise `TypeError`/`ValueError`
+  at call or trace time;
 - *value* checks (`check_positive`, `check_in_range`, `check_unit_interval`) go through
   `equinox.error_if`, so they also fire under `jax.jit` (as `equinox.EquinoxRuntimeError`),
   and are controlled by the `EQX_ON_ERROR` environment variable.
@@ -19,6 +20,7 @@ from jax import Array
 
 __all__ = [
     "as_float_array",
+    "check_axis",
     "check_broadcastable",
     "check_choice",
     "check_finite",
@@ -27,6 +29,7 @@ __all__ = [
     "check_positive",
     "check_positive_int",
     "check_unit_interval",
+    "check_wavelength_grid",
     "lookup",
 ]
 
@@ -140,3 +143,41 @@ def check_broadcastable(*named: tuple[str, Array]) -> tuple[int, ...]:
     except ValueError:
         desc = ", ".join(f"`{n}` {jnp.shape(a)}" for n, a in named)
         raise ValueError(f"Shapes do not broadcast: {desc}.") from None
+
+
+def check_axis(axis: int, ndim: int, name: str) -> int:
+    """Static check: `axis` is an int valid for `ndim` dimensions; returns it in [0, ndim)."""
+    if isinstance(axis, bool) or not isinstance(axis, int):
+        raise TypeError(f"`axis` must be an int, got {type(axis).__name__} {axis!r}.")
+    if not -ndim <= axis < ndim:
+        raise ValueError(f"`axis` {axis} is out of range for `{name}` with {ndim} dimension(s).")
+    return axis % ndim
+
+
+def check_wavelength_grid(
+    values: Array, wavelengths_nm: Array, axis: int, *, same_shape_ok: bool
+) -> int:
+    """Static checks of a spectrum `values` sampled on `wavelengths_nm` along `axis`.
+
+    The grid is 1-D with `values.shape[axis]` samples (or, if `same_shape_ok`, the shape of
+    `values`), with at least 2 samples. Returns the axis normalised to [0, ndim).
+    """
+    if values.ndim == 0:
+        raise ValueError("`values` must have at least one dimension (the wavelength axis).")
+    axis = check_axis(axis, values.ndim, "values")
+    n = values.shape[axis]
+    if wavelengths_nm.ndim == 1:
+        if wavelengths_nm.shape[0] != n:
+            raise ValueError(
+                f"`wavelengths_nm` has {wavelengths_nm.shape[0]} samples but `values` has {n} "
+                f"along axis {axis} (shape {values.shape}); they must match."
+            )
+    elif not (same_shape_ok and wavelengths_nm.shape == values.shape):
+        allowed = "1-D (n,) or the shape of `values`" if same_shape_ok else "1-D (n,)"
+        raise ValueError(
+            f"`wavelengths_nm` must be {allowed}, got shape {wavelengths_nm.shape} for "
+            f"`values` of shape {values.shape}."
+        )
+    if n < 2:
+        raise ValueError(f"A spectrum needs at least 2 samples along axis {axis}, got {n}.")
+    return axis

@@ -7,7 +7,7 @@ section 8): the unsafe operation never sees the value at which its derivative is
 import jax.numpy as jnp
 from jax import Array
 
-__all__ = ["align_ranks", "dot", "safe_div", "safe_sqrt"]
+__all__ = ["align_ranks", "dot", "interpolation_weights", "safe_div", "safe_sqrt"]
 
 
 def safe_sqrt(x: Array, *, propagate_nan: bool = False) -> Array:
@@ -42,3 +42,22 @@ def dot(a: Array, b: Array) -> Array:
     """Dot product over the last axis, `sum(a * b, axis=-1)`, after `align_ranks`."""
     a, b = align_ranks(a, b)
     return jnp.sum(a * b, axis=-1)
+
+
+def interpolation_weights(grid: Array, x: Array, extrapolation: str):
+    """Indices `i0`, `i1 = i0 + 1`, weight `t` of `grid[i1]`, and the outside mask for `x`.
+
+    `grid` is 1-D, strictly increasing; `x` has any shape. For "constant" extrapolation `x` is
+    clamped into the grid (so `t` is 0 or 1 outside); for "zero" the mask zeroes the result.
+    NaN in `x` gives a NaN weight (and is never "outside"), so it propagates.
+    """
+    n = grid.shape[0]
+    below, above = x < grid[0], x > grid[-1]
+    # Clamp with `where`, not `clip`: at x == an end sample `clip` passes half the gradient.
+    x_in = jnp.where(below, grid[0], jnp.where(above, grid[-1], x))
+    i1 = jnp.clip(jnp.searchsorted(grid, x_in, side="right"), 1, n - 1)
+    i0 = i1 - 1
+    g0, g1 = grid[i0], grid[i1]
+    t = (x_in - g0) / (g1 - g0)
+    outside = below | above if extrapolation == "zero" else None
+    return i0, i1, t, outside

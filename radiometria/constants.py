@@ -10,7 +10,8 @@ significant digit (relative 1.5e-6 for h, 2.6e-6 for k). Planck radiances comput
 differ from ones computed with the thesis's printed constants by a few parts per million.
 
 ??? cite "References"
-    `BIPM2019` (the SI Brochure, 9th ed., table 1); `CIE2018` (CIE 015:2018) for K_m and K_m'.
+    `BIPM2019` (the SI Brochure, 9th ed., table 1); `CIE2018` (CIE 015:2018) for K_m and K_m'
+    and the visible range; `Pharr2023` section 4.5 (`Lambda_min`, `Lambda_max`).
 """
 
 import math
@@ -64,6 +65,14 @@ K_M = 683.002  # lm W^-1, photopic, at 555 nm (CIE 015:2018, thesis section 2.1)
 # lm W^-1 at 507 nm (CIE 015:2018); V'(555.016 nm) by linear interpolation of the CIE 1951 table.
 # tests/test_constants.py re-derives both K_m and K'_m from the packaged tables.
 K_M_SCOTOPIC = 1700.06  # lm W^-1, scotopic, at 507 nm (CIE 015:2018)
+
+# --- The visible range ---------------------------------------------------------------------
+# The wavelength range of the CIE 1931 and 1964 colour-matching functions and of V(lambda)
+# (CIE 015:2018 tables, 360-830 nm at 1 nm), which pbrt-v4 also samples and upsamples over
+# (`Lambda_min`, `Lambda_max`, Pharr et al. 2023, section 4.5). The CIE tables take every
+# weighting function as zero outside it.
+VISIBLE_WAVELENGTH_MIN_NM = 360.0  # nm (CIE 015:2018; pbrt-v4 `Lambda_min`)
+VISIBLE_WAVELENGTH_MAX_NM = 830.0  # nm (CIE 015:2018; pbrt-v4 `Lambda_max`)
 
 # --- Unit conversions: the only place where nm and m meet ------------------------------------
 NM_PER_M = 1e9  # nm m^-1

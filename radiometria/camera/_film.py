@@ -58,7 +58,7 @@ def _cmf_table(cmfs, observer: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _normalised_cmfs(cmfs, observer: str, dtype) -> tuple[Array, Array]:
-    """The CIE table and its values divided by $\int\bar y$, as arrays of `dtype`."""
+    r"""The CIE table and its values divided by $\int\bar y$, as arrays of `dtype`."""
     if dtype is None:
         dtype = jnp.zeros(()).dtype  # the default float (float64 under jax_enable_x64)
     if not jnp.issubdtype(dtype, jnp.floating):

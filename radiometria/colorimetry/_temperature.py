@@ -26,7 +26,8 @@ from ..constants import C2
 from ..radiometry import planck
 from ._data import CMFS_XYZ, DEFAULT_OBSERVER, resolve_observer
 from ._daylight import daylight_locus_xy
-from ._models import UCS_uv_to_xy, xy_to_UCS_uv
+from ._models import UCS_uv_to_xy, XYZ_to_UCS_uv, xy_to_UCS_uv
+from ._tristimulus import tristimulus_weights
 
 # Ohno (2013) table range and spacing, as in colour-science 0.4.7 (`planckian_table`).
 CCT_MINIMAL_OHNO2013 = 1000.0  # K
@@ -107,9 +108,6 @@ def planckian_locus_uv(
     ??? cite "References"
         `CIE2018` section 9.1; `Wyszecki2000` section 3.11.
     """
-    from ._models import XYZ_to_UCS_uv
-    from ._tristimulus import tristimulus_weights
-
     T = as_float_array(temperature, "temperature")
     T = check_positive(T, "temperature", "K") * _c2_scale(c2)
     name = resolve_observer(observer, allow_rgb=False)

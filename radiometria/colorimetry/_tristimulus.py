@@ -15,6 +15,7 @@ On a uniform grid every cell is $\Delta\lambda$, the CIE 15 summation $k\sum
 trapezoid rule only by half the two end samples, where the CMFs are < 1.3e-4 of their peak.
 """
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
@@ -44,8 +45,6 @@ def _grid(wavelengths_nm, name: str = "wavelengths_nm") -> Array:
 
 
 def _is_tracer(x) -> bool:
-    import jax
-
     return isinstance(x, jax.core.Tracer)
 
 

@@ -8,6 +8,7 @@ selects the non-interactive Agg backend itself, and headless sessions fall back 
 
 from pathlib import Path
 
+from .._checks import check_choice
 from . import (
     _camera,
     _colorimetry,
@@ -35,8 +36,6 @@ def make_figures(
     - `smoke`: shrink sample counts (for CI); the figures keep their layout.
     - `progress`: optional callable `progress(name)` called before each figure.
     """
-    from .._checks import check_choice
-
     names = sorted(FIGURES) if names is None else names
     for name in names:
         check_choice(name, "figure", sorted(FIGURES))

@@ -1,7 +1,10 @@
 """Figures for `radiometria.camera` (thesis section 2.3)."""
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
+from ..camera import BoxFilter, GaussianFilter, LanczosFilter, MitchellFilter, TentFilter
 from ._registry import figure, save
 
 
@@ -14,12 +17,8 @@ def fig_2_filters(out_dir, *, smoke: bool = False):
     estimator of eq. 2.35 is unbiased). Bottom row: the 2D histogram of the sampled offsets,
     i.e. the sampling density $p \\propto |f|$ (the footprint of one pixel's samples).
     """
-    import jax
-    import jax.numpy as jnp
     import matplotlib.pyplot as plt
     from matplotlib.colors import PowerNorm
-
-    from ..camera import BoxFilter, GaussianFilter, LanczosFilter, MitchellFilter, TentFilter
 
     filters = [
         ("box", BoxFilter()),

@@ -2,6 +2,21 @@
 
 import numpy as np
 
+from ..colorimetry import (
+    RGB_COLOURSPACES,
+    CCT_to_uv,
+    CCT_to_xy,
+    UCS_uv_to_xy,
+    XYZ_to_sRGB,
+    XYZ_to_xy,
+    get_cmfs,
+    get_illuminant,
+    sd_to_XYZ,
+    srgb_eotf,
+    srgb_eotf_inverse,
+    xy_to_XYZ,
+)
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._registry import figure, save
 
 
@@ -9,8 +24,6 @@ from ._registry import figure, save
 def fig_2_1_cmfs(out_dir, *, smoke: bool = False):
     """CIE 1931 RGB (Wright & Guild) and XYZ colour-matching functions (thesis fig. 2.1)."""
     import matplotlib.pyplot as plt
-
-    from ..colorimetry import get_cmfs
 
     rgb = get_cmfs("Wright & Guild 1931 2 Degree RGB CMFs")
     xyz = get_cmfs("CIE 1931 2 Degree Standard Observer")
@@ -34,7 +47,7 @@ def fig_2_1_cmfs(out_dir, *, smoke: bool = False):
         )
     ):
         ax1.plot(wl, np.asarray(xyz.values)[:, k], color=c, label=lab)
-    ax1.set_xlim(360, 830)
+    ax1.set_xlim(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM)
     ax1.set_title("CIE 1931 XYZ colour-matching functions (2°)")
     ax1.set_xlabel("wavelength [nm]")
     ax1.legend()
@@ -44,8 +57,6 @@ def fig_2_1_cmfs(out_dir, *, smoke: bool = False):
 
 
 def _spectral_locus_xy() -> np.ndarray:
-    from ..colorimetry import get_cmfs
-
     v = np.asarray(get_cmfs().values)[:421]  # 360-780 nm; beyond, the locus folds back on itself
     return v[:, :2] / v.sum(axis=1, keepdims=True)
 
@@ -53,8 +64,6 @@ def _spectral_locus_xy() -> np.ndarray:
 def _horseshoe_image(locus: np.ndarray, n: int) -> np.ndarray:
     """RGBA image of the xy diagram filled with (normalised, gamut-clipped) sRGB colours."""
     from matplotlib.path import Path as MplPath
-
-    from ..colorimetry import XYZ_to_sRGB, xy_to_XYZ
 
     x = np.linspace(0.0, 0.8, n)
     y = np.linspace(0.0, 0.9, n)
@@ -64,8 +73,6 @@ def _horseshoe_image(locus: np.ndarray, n: int) -> np.ndarray:
     xy_in = np.where(inside[:, None], xy, 1.0 / 3.0)  # avoid y = 0 outside the locus
     rgb_lin = np.asarray(XYZ_to_sRGB(np.asarray(xy_to_XYZ(xy_in))))  # encoded; clip below
     # Scale each colour so its largest linear component is 1, then encode again.
-    from ..colorimetry import srgb_eotf, srgb_eotf_inverse
-
     lin = np.asarray(srgb_eotf(rgb_lin))
     lin = np.clip(lin, 0.0, None)
     lin = lin / np.maximum(lin.max(axis=-1, keepdims=True), 1e-12)
@@ -80,16 +87,6 @@ def fig_2_2_chromaticity(out_dir, *, smoke: bool = False):
     lines, the sRGB / Display P3 / Rec.2020 gamuts and the illuminants of thesis table 2.1
     (thesis fig. 2.2 and 2.3)."""
     import matplotlib.pyplot as plt
-
-    from ..colorimetry import (
-        RGB_COLOURSPACES,
-        CCT_to_uv,
-        CCT_to_xy,
-        UCS_uv_to_xy,
-        XYZ_to_xy,
-        get_illuminant,
-        sd_to_XYZ,
-    )
 
     locus = _spectral_locus_xy()
     fig, ax = plt.subplots(figsize=(6.6, 7.0))
@@ -135,7 +132,7 @@ def fig_2_2_chromaticity(out_dir, *, smoke: bool = False):
     ]:
         s = get_illuminant(name)
         wl, v = np.asarray(s.wavelengths_nm), np.asarray(s.values)
-        keep = wl >= 360.0
+        keep = wl >= VISIBLE_WAVELENGTH_MIN_NM
         xy = np.asarray(XYZ_to_xy(sd_to_XYZ(v[keep], wl[keep])))
         ax.plot(*xy, "o", mfc="w", mec="k", ms=4, zorder=6)
         ax.annotate(name, xy, textcoords="offset points", xytext=offset, fontsize=8, zorder=6)

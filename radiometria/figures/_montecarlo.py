@@ -2,8 +2,11 @@
 
 import math
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
+from .. import montecarlo as mc
 from ._registry import figure, save
 
 
@@ -15,10 +18,7 @@ def fig_5_point_sets(out_dir, *, smoke: bool = False):
     (Joe-Kuo) and Owen-scrambled Sobol, 256 points each (64 in smoke mode), with the 16 x 16
     grid that a (0, 8, 2)-net fills with exactly one point per elementary interval.
     """
-    import jax
     import matplotlib.pyplot as plt
-
-    from .. import montecarlo as mc
 
     n = 64 if smoke else 256
     side = int(round(math.sqrt(n)))
@@ -51,10 +51,7 @@ def fig_6_convergence(out_dir, *, smoke: bool = False):
     2-4 dimensions; plain MC, Latin hypercube, Owen-scrambled Halton and Owen-scrambled Sobol,
     each RMSE over independent replicates. The dotted guides have slopes -1/2 and -3/2.
     """
-    import jax
     import matplotlib.pyplot as plt
-
-    from .. import montecarlo as mc
 
     ks = range(4, 9) if smoke else range(4, 15)
     ns = [2**k for k in ks]
@@ -118,25 +115,16 @@ def rect_irradiance_exact() -> float:
 
 
 def _rect_triangles():
-    import jax.numpy as jnp
-
     v = jnp.asarray(_rect_vertices())
     return [(v[0], v[1], v[2]), (v[0], v[2], v[3])]
 
 
 def _rect_solid_angle() -> float:
-    from .. import montecarlo as mc
-
     return float(sum(mc.spherical_triangle_area(*t) for t in _rect_triangles()))
 
 
 def _rect_terms(method: str, n: int, key):
     """Per-sample terms of the irradiance estimators (mean = E), shape (n,)."""
-    import jax
-    import jax.numpy as jnp
-
-    from .. import montecarlo as mc
-
     (x0, x1), (y0, y1) = _RECT
     area = (x1 - x0) * (y1 - y0)
 
@@ -229,7 +217,6 @@ def fig_7_variance_reduction(out_dir, *, smoke: bool = False):
     each) and area sampling with a control variate (the light's solid angle). Right: the
     variance per sample.
     """
-    import jax
     import matplotlib.pyplot as plt
 
     exact = rect_irradiance_exact()

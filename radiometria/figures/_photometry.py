@@ -2,6 +2,8 @@
 
 import numpy as np
 
+from ..constants import K_M, K_M_SCOTOPIC, VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
+from ..photometry import luminous_efficiency_table
 from ._registry import figure, save
 
 
@@ -9,9 +11,6 @@ from ._registry import figure, save
 def fig_2_luminous_efficiency(out_dir, *, smoke: bool = False):
     """CIE photopic V(lambda) and scotopic V'(lambda), and the spectral luminous efficacy K V."""
     import matplotlib.pyplot as plt
-
-    from ..constants import K_M, K_M_SCOTOPIC
-    from ..photometry import luminous_efficiency_table
 
     fig, (ax, ax_k) = plt.subplots(1, 2, figsize=(10.0, 3.8), layout="constrained")
     curves = [
@@ -36,6 +35,6 @@ def fig_2_luminous_efficiency(out_dir, *, smoke: bool = False):
     ax_k.set_title("Spectral luminous efficacy")
     ax_k.legend(fontsize=8)
     for a in (ax, ax_k):
-        a.set_xlim(360.0, 830.0)
+        a.set_xlim(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM)
         a.grid(True, alpha=0.3)
     return save(fig, out_dir, "fig_2_luminous_efficiency")

@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from ..radiometry import planck, planck_peak_wavelength
 from ._registry import figure, save
 
 
@@ -9,8 +10,6 @@ from ._registry import figure, save
 def fig_1_planck(out_dir, *, smoke: bool = False):
     """Planck's law (thesis eq. 1.24) for 3000-6000 K, log-log, with Wien's displacement locus."""
     import matplotlib.pyplot as plt
-
-    from ..radiometry import planck, planck_peak_wavelength
 
     n = 200 if smoke else 1000
     wavelengths_nm = np.geomspace(100.0, 1e5, n)

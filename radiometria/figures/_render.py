@@ -2,13 +2,13 @@
 
 import numpy as np
 
+from ..colorimetry import srgb_eotf_inverse
+from ..render import render
 from ._registry import figure, save
 
 
 def _display(rgb_linear: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     """Linear sRGB -> sRGB-encoded values in [0, 1] for `imshow` (no tone mapping)."""
-    from ..colorimetry import srgb_eotf_inverse
-
     return np.clip(np.asarray(srgb_eotf_inverse(np.clip(rgb_linear * exposure, 0.0, 1.0))), 0, 1)
 
 
@@ -23,8 +23,6 @@ def fig_9_cornell_box(out_dir, *, smoke: bool = False):
     light has the data's relative scale, so that image is exposed to a mean of 0.18.
     """
     import matplotlib.pyplot as plt
-
-    from ..render import render
 
     size, spp = (32, 4) if smoke else (256, 64)
     box = np.asarray(render("cornell-box", spp=spp, width=size, height=size, progress=False))
@@ -57,8 +55,6 @@ def fig_9_render_convergence(out_dir, *, smoke: bool = False):
     16 times the largest sample count (different seed).
     """
     import matplotlib.pyplot as plt
-
-    from ..render import render
 
     size, max_spp = (8, 8) if smoke else (32, 64)
     counts = [2**i for i in range(int(np.log2(max_spp)) + 1)]

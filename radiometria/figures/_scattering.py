@@ -1,7 +1,21 @@
 """Figures for `radiometria.scattering` (thesis chapter 3)."""
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
+from ..colorimetry import XYZ_to_sRGB, get_illuminant, sd_to_XYZ
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
+from ..scattering import (
+    DiffuseBxDF,
+    OrenNayarBxDF,
+    RoughConductorBxDF,
+    RoughDielectricBxDF,
+    conductor_ior,
+    fresnel_conductor,
+    fresnel_dielectric,
+    fresnel_dielectric_polarized,
+)
 from ._registry import figure, save
 
 
@@ -13,8 +27,6 @@ def fig_3_fresnel_dielectric(out_dir, *, smoke: bool = False):
     the glass (eta = 1/1.5), with total internal reflection beyond the critical angle.
     """
     import matplotlib.pyplot as plt
-
-    from ..scattering import fresnel_dielectric, fresnel_dielectric_polarized
 
     n = 181 if smoke else 901
     eta = 1.5
@@ -65,8 +77,6 @@ def fig_3_fresnel_dielectric(out_dir, *, smoke: bool = False):
 
 def _srgb_of_reflectance(wl: np.ndarray, reflectance: np.ndarray) -> np.ndarray:
     """Gamma-encoded sRGB of a reflectance spectrum under D65 (colorimetry, thesis 2.2.2)."""
-    from ..colorimetry import XYZ_to_sRGB, get_illuminant, sd_to_XYZ
-
     d65 = get_illuminant("D65")
     s = np.interp(wl, np.asarray(d65.wavelengths_nm), np.asarray(d65.values))
     xyz = sd_to_XYZ(np.asarray(reflectance, float), np.asarray(wl, float), illuminant=s)
@@ -82,9 +92,7 @@ def fig_3_fresnel_conductors(out_dir, *, smoke: bool = False):
     """
     import matplotlib.pyplot as plt
 
-    from ..scattering import conductor_ior, fresnel_conductor
-
-    wl = np.linspace(360.0, 830.0, 95 if smoke else 471)
+    wl = np.linspace(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM, 95 if smoke else 471)
     metals = [("Au", "gold", "goldenrod"), ("Ag", "silver", "0.5"), ("Cu", "copper", "chocolate")]
     metals.append(("Al", "aluminium", "steelblue"))
     fig, axes = plt.subplots(1, 3, figsize=(13.0, 4.0))
@@ -134,10 +142,7 @@ def fig_3_brdf_lobes(out_dir, *, smoke: bool = False):
     Incidence at 45 degrees; rough conductor (`RoughConductorBxDF`, unit Fresnel term) for
     several roughnesses, the Lambertian lobe for reference (thesis fig. 3.1 categories).
     """
-    import jax.numpy as jnp
     import matplotlib.pyplot as plt
-
-    from ..scattering import DiffuseBxDF, OrenNayarBxDF, RoughConductorBxDF
 
     theta_i = np.radians(45.0)
     wi = jnp.array([-np.sin(theta_i), 0.0, np.cos(theta_i)])
@@ -182,11 +187,7 @@ def fig_3_albedo_roughness(out_dir, *, smoke: bool = False):
     (eta = 1.5, reflection + transmission, importance transport); Monte Carlo estimates of
     thesis eq. 3.5 with their 2-sigma error bars (`hemispherical_directional_reflectance`).
     """
-    import jax
-    import jax.numpy as jnp
     import matplotlib.pyplot as plt
-
-    from ..scattering import RoughConductorBxDF, RoughDielectricBxDF
 
     n = 4_096 if smoke else 131_072
     alphas = np.linspace(0.05, 1.0, 8 if smoke else 20)

@@ -1,7 +1,18 @@
 """Figures for `radiometria.upsampling` (thesis section 2.2.3): RGB to spectrum."""
 
+import jax
 import numpy as np
 
+from ..colorimetry import get_cmfs, get_colourspace
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
+from ..upsampling import (
+    RGBAlbedoSpectrum,
+    forward_model,
+    get_lut,
+    roundtrip_delta_E,
+    sigmoid_jakob2019,
+    sigmoid_polynomial_jakob2019,
+)
 from ._registry import figure, save
 
 # Thesis figure 2.4: c0 = -0.000073447, c1 = 0.035354, c2 = -2.607 (nm coefficients).
@@ -13,10 +24,8 @@ def fig_2_4_sigmoid(out_dir, *, smoke: bool = False):
     """The sigmoid s(x) (eq. 2.26) and S(lambda) with the thesis's coefficients (fig. 2.4)."""
     import matplotlib.pyplot as plt
 
-    from ..upsampling import sigmoid_jakob2019, sigmoid_polynomial_jakob2019
-
     x = np.linspace(-10.0, 10.0, 401)
-    wl = np.linspace(360.0, 830.0, 471)
+    wl = np.linspace(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM, 471)
     c = np.asarray(THESIS_COEFFS)
     poly = (c[0] * wl + c[1]) * wl + c[2]
     S = np.asarray(sigmoid_polynomial_jakob2019(c, wl))
@@ -63,11 +72,7 @@ def fig_2_roundtrip_error(out_dir, *, smoke: bool = False):
     (linear RGB with its largest component 1, and 0.02) and sent through the table:
     RGB -> coefficients -> spectrum -> XYZ under D65 -> CIEDE2000 against the input.
     """
-    import jax
     import matplotlib.pyplot as plt
-
-    from ..colorimetry import get_cmfs, get_colourspace
-    from ..upsampling import get_lut, roundtrip_delta_E
 
     cs = get_colourspace("sRGB")
     lut = get_lut("sRGB")
@@ -109,7 +114,7 @@ def colorchecker_spectra(step_nm: float = 1.0) -> tuple[np.ndarray, np.ndarray, 
     import colour
 
     data = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
-    wl = np.arange(360.0, 830.0 + step_nm / 2, step_nm)
+    wl = np.arange(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM + step_nm / 2, step_nm)
     names = list(data.keys())
     values = np.stack([np.interp(wl, data[k].wavelengths, data[k].values) for k in names])
     return wl, values, names
@@ -123,11 +128,7 @@ def fig_2_colorchecker(out_dir, *, smoke: bool = False):
     under D65 (the forward model of the fit), then looked up in the packaged table; the panel
     shows both spectra on the patch's colour and the round-trip CIEDE2000.
     """
-    import jax
     import matplotlib.pyplot as plt
-
-    from ..colorimetry import get_colourspace
-    from ..upsampling import RGBAlbedoSpectrum, forward_model, get_lut, roundtrip_delta_E
 
     model = forward_model("sRGB")
     wl, values, names = colorchecker_spectra()

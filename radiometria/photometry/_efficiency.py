@@ -29,8 +29,8 @@ from jaxtyping import Array, Float
 
 from .. import constants as _c
 from .._checks import as_float_array, lookup
+from .._math import interpolation_weights
 from .._types import FloatLike
-from ..radiometry._spectra import _interpolation_weights
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 _FILES = {"photopic": "cie_1924_photopic.csv", "scotopic": "cie_1951_scotopic.csv"}
@@ -91,7 +91,7 @@ def _efficiency_on(wavelength_nm: Array, vision: str) -> Array:
     grid_np, values_np = _check_vision(vision)
     grid = jnp.asarray(grid_np, dtype=wavelength_nm.dtype)
     table = jnp.asarray(values_np, dtype=wavelength_nm.dtype)
-    i0, i1, t, outside = _interpolation_weights(grid, wavelength_nm, "zero")
+    i0, i1, t, outside = interpolation_weights(grid, wavelength_nm, "zero")
     return jnp.where(outside, 0.0, (1.0 - t) * table[i0] + t * table[i1])
 
 

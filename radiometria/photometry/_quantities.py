@@ -15,14 +15,14 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .._checks import as_float_array, check_choice
-from ..radiometry._spectra import _check_grid, integrate_spectrum
+from .._checks import as_float_array, check_choice, check_wavelength_grid
+from ..radiometry import integrate_spectrum
 from ._efficiency import EFFICACY, VISIONS, _efficiency_on
 
 
 def _weighted(values: Array, wavelengths_nm: Array, axis: int, vision: str) -> tuple[Array, int]:
     """`values * V(wavelengths_nm)` with V broadcast along `axis`; returns it and the axis."""
-    axis = _check_grid(values, wavelengths_nm, axis, same_shape_ok=True)
+    axis = check_wavelength_grid(values, wavelengths_nm, axis, same_shape_ok=True)
     efficiency = _efficiency_on(wavelengths_nm, vision)
     if efficiency.ndim == 1:
         shape = [1] * values.ndim

@@ -8,40 +8,10 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .._checks import as_float_array, check_choice
+from .._checks import as_float_array, check_choice, check_wavelength_grid
+from .._math import interpolation_weights
 
 EXTRAPOLATIONS = ("zero", "constant")
-
-
-def _normalize_axis(axis: int, ndim: int, name: str) -> int:
-    if isinstance(axis, bool) or not isinstance(axis, int):
-        raise TypeError(f"`axis` must be an int, got {type(axis).__name__} {axis!r}.")
-    if not -ndim <= axis < ndim:
-        raise ValueError(f"`axis` {axis} is out of range for `{name}` with {ndim} dimension(s).")
-    return axis % ndim
-
-
-def _check_grid(values: Array, wavelengths_nm: Array, axis: int, *, same_shape_ok: bool) -> int:
-    """Static checks of a (values, grid) pair; returns the normalised axis."""
-    if values.ndim == 0:
-        raise ValueError("`values` must have at least one dimension (the wavelength axis).")
-    axis = _normalize_axis(axis, values.ndim, "values")
-    n = values.shape[axis]
-    if wavelengths_nm.ndim == 1:
-        if wavelengths_nm.shape[0] != n:
-            raise ValueError(
-                f"`wavelengths_nm` has {wavelengths_nm.shape[0]} samples but `values` has {n} "
-                f"along axis {axis} (shape {values.shape}); they must match."
-            )
-    elif not (same_shape_ok and wavelengths_nm.shape == values.shape):
-        allowed = "1-D (n,) or the shape of `values`" if same_shape_ok else "1-D (n,)"
-        raise ValueError(
-            f"`wavelengths_nm` must be {allowed}, got shape {wavelengths_nm.shape} for "
-            f"`values` of shape {values.shape}."
-        )
-    if n < 2:
-        raise ValueError(f"A spectrum needs at least 2 samples along axis {axis}, got {n}.")
-    return axis
 
 
 def _check_increasing(wavelengths_nm: Array, axis: int) -> Array:
@@ -91,7 +61,7 @@ def integrate_spectrum(
     """
     values = as_float_array(values, "values")
     wavelengths_nm = as_float_array(wavelengths_nm, "wavelengths_nm")
-    axis = _check_grid(values, wavelengths_nm, axis, same_shape_ok=True)
+    axis = check_wavelength_grid(values, wavelengths_nm, axis, same_shape_ok=True)
     values = jnp.moveaxis(values, axis, -1)
     if wavelengths_nm.ndim == 1:
         wavelengths_nm = _check_increasing(wavelengths_nm, 0)
@@ -100,25 +70,6 @@ def integrate_spectrum(
     step = jnp.diff(wavelengths_nm, axis=-1)
     step = jnp.broadcast_to(step, values.shape[:-1] + step.shape[-1:])
     return 0.5 * jnp.sum(step * (values[..., 1:] + values[..., :-1]), axis=-1)
-
-
-def _interpolation_weights(grid: Array, x: Array, extrapolation: str):
-    """Indices `i0`, `i1 = i0 + 1`, weight `t` of `grid[i1]`, and the outside mask for `x`.
-
-    `grid` is 1-D, strictly increasing; `x` has any shape. For "constant" extrapolation `x` is
-    clamped into the grid (so `t` is 0 or 1 outside); for "zero" the mask zeroes the result.
-    NaN in `x` gives a NaN weight (and is never "outside"), so it propagates.
-    """
-    n = grid.shape[0]
-    below, above = x < grid[0], x > grid[-1]
-    # Clamp with `where`, not `clip`: at x == an end sample `clip` passes half the gradient.
-    x_in = jnp.where(below, grid[0], jnp.where(above, grid[-1], x))
-    i1 = jnp.clip(jnp.searchsorted(grid, x_in, side="right"), 1, n - 1)
-    i0 = i1 - 1
-    g0, g1 = grid[i0], grid[i1]
-    t = (x_in - g0) / (g1 - g0)
-    outside = below | above if extrapolation == "zero" else None
-    return i0, i1, t, outside
 
 
 def resample_spectrum(
@@ -163,9 +114,9 @@ def resample_spectrum(
     values = as_float_array(values, "values")
     wavelengths_nm = as_float_array(wavelengths_nm, "wavelengths_nm")
     new_wavelengths_nm = as_float_array(new_wavelengths_nm, "new_wavelengths_nm")
-    axis = _check_grid(values, wavelengths_nm, axis, same_shape_ok=False)
+    axis = check_wavelength_grid(values, wavelengths_nm, axis, same_shape_ok=False)
     wavelengths_nm = _check_increasing(wavelengths_nm, 0)
-    i0, i1, t, outside = _interpolation_weights(wavelengths_nm, new_wavelengths_nm, extrapolation)
+    i0, i1, t, outside = interpolation_weights(wavelengths_nm, new_wavelengths_nm, extrapolation)
     values = jnp.moveaxis(values, axis, -1)
     v0 = jnp.take(values, i0, axis=-1)  # shape values.shape[:-1] + new.shape
     v1 = jnp.take(values, i1, axis=-1)

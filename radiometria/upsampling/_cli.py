@@ -2,18 +2,28 @@
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
+
+import jax
+
+from .._checks import check_positive_int
+from ..colorimetry import get_colourspace
+from ._fit_lut import fit_lut
+from ._io import load_lut, save_lut
+from ._roundtrip import (
+    roundtrip_delta_E,
+    roundtrip_grid_rgb,
+    roundtrip_random_rgb,
+    roundtrip_statistics,
+)
 
 
 def _use_all_cpu_cores() -> None:
     """Run a multi-core CPU as one JAX device per core (XLA runs the table's column blocks
     in parallel that way), if the JAX backend has not started yet; harmless otherwise."""
-    import os
-
-    import jax
-
     try:
         if jax.config.jax_num_cpu_devices in (-1, None):
             jax.config.update("jax_num_cpu_devices", max(1, os.cpu_count() or 1))
@@ -30,9 +40,6 @@ def lut_build(args: argparse.Namespace) -> int:
     """
     from tqdm import tqdm
 
-    from .._checks import check_positive_int
-    from ..colorimetry import get_colourspace
-
     res = check_positive_int(args.res, "--res", minimum=2)
     space = get_colourspace(args.space).name
     out = Path(args.out)
@@ -41,11 +48,6 @@ def lut_build(args: argparse.Namespace) -> int:
     if not out.parent.exists():
         raise ValueError(f"--out {str(out)!r}: directory {str(out.parent)!r} does not exist.")
     _use_all_cpu_cores()
-    import jax
-
-    from ._fit_lut import fit_lut
-    from ._io import save_lut
-
     devices = jax.devices() if len(jax.devices()) > 1 else None
     bar = tqdm(total=3 * res * res, desc=f"lut {space} res {res}", unit="col", file=sys.stderr)
 
@@ -81,17 +83,6 @@ def lut_check(args: argparse.Namespace) -> int:
     coefficients -> spectrum -> XYZ under the space's illuminant -> Lab, against the input)
     on the grid of encoded values and on uniform random linear colours, computed in float64.
     """
-    import jax
-
-    from .._checks import check_positive_int
-    from ._io import load_lut
-    from ._roundtrip import (
-        roundtrip_delta_E,
-        roundtrip_grid_rgb,
-        roundtrip_random_rgb,
-        roundtrip_statistics,
-    )
-
     grid = check_positive_int(args.grid, "--grid", minimum=2)
     n_random = check_positive_int(args.random, "--random", minimum=0)
     lut, info = load_lut(args.file, with_info=True)

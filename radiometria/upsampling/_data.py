@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..colorimetry import get_colourspace
 from ._fit_lut import fit_lut
 from ._io import encode_planes as encode_planes, load_lut
 from ._lut import RGBToSpectrumLUT
@@ -63,6 +64,4 @@ def get_lut(space="sRGB") -> RGBToSpectrumLUT:
     ??? cite "References"
         `Jakob2019`; `Pharr2023` section 4.6.6.
     """
-    from ..colorimetry import get_colourspace
-
     return _get_lut_cached(get_colourspace(space).name)

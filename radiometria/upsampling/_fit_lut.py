@@ -28,9 +28,11 @@ import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
 from jax import lax
+from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from jaxtyping import Array, Float
 
 from .._checks import check_positive_int
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._fit import (
     DEFAULT_TOLERANCE,
     LMState,
@@ -141,7 +143,8 @@ def _results_array(code: np.ndarray) -> RESULTS:
 
 def _normalised_to_nm_np(c: np.ndarray) -> np.ndarray:
     """NumPy twin of `normalised_to_nm_coefficients` (host-side post-processing)."""
-    a, b = 360.0, 1.0 / 470.0
+    a = VISIBLE_WAVELENGTH_MIN_NM
+    b = 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
     A, B, C = c[..., 0], c[..., 1], c[..., 2]
     return np.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
 
@@ -314,7 +317,6 @@ def _make_fit_fn(m: ModelArrays, scale, k0, chunk: int, mesh=None):
 
     if mesh is None:
         return jax.jit(blocks)
-    from jax.sharding import PartitionSpec as P
 
     def sharded(e, schedule):
         c, r, it = blocks(e, schedule)
@@ -337,8 +339,6 @@ def _cached_fit_fn(colourspace: str, step_nm: float, dtype: str, res: int, chunk
     scale = jnp.asarray(brightness_scale(res), dtype)
     mesh = sharding = None
     if device_ids is not None:  # also for one device: the sharded code path, testable anywhere
-        from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
-
         by_id = {d.id: d for d in jax.devices()}
         mesh = Mesh(np.asarray([by_id[i] for i in device_ids]), ("columns",))
         sharding = NamedSharding(mesh, P("columns"))

@@ -35,7 +35,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from ._sigmoid_polynomial import LAMBDA_MAX_NM, LAMBDA_MIN_NM
+from ..colorimetry import daylight_spd, get_colourspace, get_illuminant, tristimulus_weights
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 
 DEFAULT_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 # CCT of the ACES white: CIE daylight at 6000 K on the pre-1968 temperature scale.
@@ -87,14 +88,10 @@ class ForwardModel(eqx.Module):
 
 
 def _space(colourspace):
-    from ..colorimetry import get_colourspace
-
     return get_colourspace(colourspace)
 
 
 def _illuminant_values(whitepoint_name: str, wl: Array) -> Array:
-    from ..colorimetry import daylight_spd, get_illuminant
-
     if whitepoint_name == "ACES":
         return daylight_spd(ACES_WHITE_CCT, wl)
     ill = get_illuminant(whitepoint_name)
@@ -103,11 +100,9 @@ def _illuminant_values(whitepoint_name: str, wl: Array) -> Array:
 
 @functools.lru_cache(maxsize=16)
 def _forward_model_cached(name: str, step_nm: float) -> ForwardModel:
-    from ..colorimetry import tristimulus_weights
-
     cs = _space(name)
-    n = int(round((LAMBDA_MAX_NM - LAMBDA_MIN_NM) / step_nm)) + 1
-    wl_np = np.linspace(LAMBDA_MIN_NM, LAMBDA_MAX_NM, n)
+    n = int(round((VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM) / step_nm)) + 1
+    wl_np = np.linspace(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM, n)
     with jax.enable_x64(True):
         # One compiled program instead of dozens of eagerly dispatched operations.
         @jax.jit
@@ -129,7 +124,8 @@ def _forward_model_cached(name: str, step_nm: float) -> ForwardModel:
         colourspace=cs.name,
         step_nm=float(step_nm),
         wavelengths_nm=wl_np,
-        lambda_normalised=(wl_np - LAMBDA_MIN_NM) / (LAMBDA_MAX_NM - LAMBDA_MIN_NM),
+        lambda_normalised=(wl_np - VISIBLE_WAVELENGTH_MIN_NM)
+        / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM),
         weights_XYZ=w_bal,
         matrix_RGB_to_XYZ=to_xyz,
         matrix_XYZ_to_RGB=to_rgb,
@@ -163,7 +159,7 @@ def forward_model(colourspace="sRGB", *, step_nm: float = 1.0) -> ForwardModel:
     """
     if not isinstance(step_nm, int | float) or step_nm <= 0:
         raise ValueError(f"`step_nm` must be a positive number [nm], got {step_nm!r}.")
-    n = (LAMBDA_MAX_NM - LAMBDA_MIN_NM) / step_nm
+    n = (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM) / step_nm
     if abs(n - round(n)) > 1e-9:
         raise ValueError(f"`step_nm` must divide 470 nm evenly, got {step_nm!r}. [nm]")
     name = _space(colourspace).name

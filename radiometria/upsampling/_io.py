@@ -49,6 +49,7 @@ import numpy as np
 
 from .._io import atomic_write
 from ..colorimetry import RGB_COLOURSPACES
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._forward import forward_model
 from ._lut import RGBToSpectrumLUT
 
@@ -150,7 +151,10 @@ def _forward_block(colourspace: str) -> bytes:
     w_rgb = np.asarray(model.weights_XYZ) @ np.asarray(model.matrix_XYZ_to_RGB).T  # (n, 3)
     n = lam.size
     nfine = -(-n // 16) * 16
-    lam_p = np.full(nfine, (0.0 - 360.0) / 470.0)
+    lam_p = np.full(
+        nfine,
+        (0.0 - VISIBLE_WAVELENGTH_MIN_NM) / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM),
+    )
     lam_p[:n] = lam
     tbl = np.zeros((3, nfine))
     tbl[:, :n] = w_rgb.T

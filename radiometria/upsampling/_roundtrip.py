@@ -20,6 +20,7 @@ import numpy as np
 from jaxtyping import ArrayLike
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
+from ..colorimetry import delta_E_CIE2000, get_colourspace
 from ._fit import _check_rgb_values
 from ._forward import XYZ_to_Lab_white, forward_model
 from ._lut import RGBToSpectrumLUT, lookup
@@ -29,8 +30,6 @@ from ._sigmoid_polynomial import _evaluate
 def roundtrip_grid_rgb(n: int = 33, colourspace="sRGB") -> np.ndarray:
     """Linear RGB (n^3, 3) of the n^3 grid of encoded values decoded with the space's
     transfer function (float64 NumPy), the test set of thesis section 2.2.3's table. [-]"""
-    from ..colorimetry import get_colourspace
-
     n = check_positive_int(n, "grid", minimum=2)
     cs = get_colourspace(colourspace)
     v = np.linspace(0.0, 1.0, n)
@@ -51,8 +50,6 @@ def roundtrip_random_rgb(n: int = 100_000, seed: int = 0) -> np.ndarray:
 
 
 def _roundtrip_chunk(coeffs, scale, res, colourspace, rgb, lam_nm, weights, to_xyz, white):
-    from ..colorimetry import delta_E_CIE2000
-
     lut = RGBToSpectrumLUT(scale, coeffs, colourspace)
     c = lookup(lut, rgb)
     spectrum = _evaluate(c, lam_nm)  # (n, n_lambda)
