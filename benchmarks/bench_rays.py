@@ -11,9 +11,10 @@ Embree (`embreex`, `pip install embreex`, a benchmark-only dependency; its
 single-threaded here; `--all-cores` lets XLA use every core. The best of `--repeats` runs is
 reported.
 
-`--cornell` first times the brute-force queries (native and JAX) on the 36-triangle Cornell box
-(what the renderer uses for scenes of <= 64 triangles): rays with origins uniform in the room's
-box and uniform directions, closest-hit and any-hit, under `jax.jit` (no eager padding), warm.
+`--cornell` first times the brute-force queries with every available traversal back end (native
+and JAX) on the 36-triangle Cornell box (what the renderer uses for scenes of <= 64 triangles):
+rays with origins uniform in the room's box and uniform directions, closest-hit and any-hit,
+under `jax.jit` (no eager padding), warm.
 
     .venv/bin/python benchmarks/bench_rays.py [--subdivisions 3 5 6 8] [--rays 262144]
     .venv/bin/python benchmarks/bench_rays.py --cornell --all-cores --subdivisions
@@ -47,6 +48,7 @@ def _cornell(args, n: int, cores: str) -> None:
         intersect_brute_force_closest,
         load_scene,
     )
+    from radiometria.render._geometry import TRAVERSAL_BACKENDS
 
     scene = load_scene("cornell-box")
     v = scene.vertices.astype(np.float32)
@@ -55,7 +57,10 @@ def _cornell(args, n: int, cores: str) -> None:
     o = jnp.asarray(rng.uniform(v.min(0), v.max(0), (n, 3)).astype(np.float32))
     d = jnp.asarray(rng.normal(size=(n, 3)).astype(np.float32))
     tmax = jnp.full(n, jnp.inf, jnp.float32)
-    for backend in ("native", "jax"):
+    for backend, impl in TRAVERSAL_BACKENDS.items():  # every registered back end
+        if not (ok := impl.available())[0]:
+            print(f"Cornell box, brute force ({backend}): unavailable, {ok[1]}")
+            continue
         closest = jax.jit(lambda *a, b=backend: intersect_brute_force_closest(*a, backend=b))
         any_hit = jax.jit(lambda *a, b=backend: intersect_brute_force_any(*a, backend=b))
         t_c = _best_time(lambda c=closest: c(mesh, o, d, tmax).t.block_until_ready(), args.repeats)

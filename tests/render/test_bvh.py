@@ -12,7 +12,7 @@ from radiometria.render import (
     intersect_closest,
     intersect_closest as _intersect_closest,
 )
-from radiometria.render._bvh import EMPTY
+from radiometria.render._geometry._bvh import EMPTY
 
 
 def _leaves(bvh: BVH):

@@ -17,6 +17,12 @@ from radiometria.render import (
     intersect_closest,
     native_status,
 )
+from radiometria.render._geometry import (
+    TRAVERSAL_BACKENDS,
+    JaxTraversal,
+    NativeCPUTraversal,
+    resolve_backend,
+)
 
 _HAS_COMPILER = any(shutil.which(c) for c in (os.environ.get("CXX") or "c++", "g++", "clang++"))
 
@@ -83,6 +89,26 @@ def test_bad_backend_is_rejected():
         intersect_closest(bvh, np.zeros((1, 3)), np.ones((1, 3)), backend="embree")
 
 
+def test_backends_are_objects_chosen_by_name_or_passed_directly():
+    """`TRAVERSAL_BACKENDS` maps names to back ends in order of preference; a back-end object
+    gives the hits of its name, and `"auto"` on the CPU is the native kernel where it loads."""
+    bvh = build_bvh(*icosphere(1))
+    o, d = _rays(128)
+    assert list(TRAVERSAL_BACKENDS) == ["native", "jax"]
+    assert isinstance(resolve_backend("jax"), JaxTraversal)
+    assert resolve_backend(TRAVERSAL_BACKENDS["jax"]) is TRAVERSAL_BACKENDS["jax"]
+    hash(JaxTraversal())  # a static jit argument
+    for name, backend in TRAVERSAL_BACKENDS.items():
+        if not backend.available()[0]:
+            continue
+        a = intersect_closest(bvh, o, d, backend=name)
+        b = intersect_closest(bvh, o, d, backend=backend)
+        for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
+            np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+    if jax.default_backend() == "cpu" and native_status()[0]:
+        assert isinstance(resolve_backend("auto"), NativeCPUTraversal)
+
+
 def _run(code: str, **env) -> subprocess.CompletedProcess:
     return subprocess.run(
         [sys.executable, "-c", code],
@@ -97,10 +123,11 @@ def _run(code: str, **env) -> subprocess.CompletedProcess:
 _PROBE = """
 import numpy as np
 from radiometria.render import build_bvh, icosphere, intersect_closest, native_status
-from radiometria.render._native import resolve_backend
+from radiometria.render._geometry._registry import TRAVERSAL_BACKENDS, resolve_backend
 bvh = build_bvh(*icosphere(1))
 h = intersect_closest(bvh, np.zeros((2, 3)), np.array([[0, 0, 1.0], [1, 0, 0]]))
-print(native_status(), resolve_backend("auto"), np.asarray(h.prim >= 0).tolist())
+name = {b: k for k, b in TRAVERSAL_BACKENDS.items()}[resolve_backend("auto")]
+print(native_status(), name, np.asarray(h.prim >= 0).tolist())
 """
 
 

@@ -5,7 +5,8 @@ and split together with vectorised NumPy (`np.minimum.at` over `(node, axis, bin
 the Python loop runs once per *level* (about 2 log2(f) times), not once per node. A 10^6
 triangle mesh builds in a few seconds.
 
-The result is a binary BVH stored as flat arrays that the traversal in `_intersect.py` reads:
+The result is a binary BVH stored as flat arrays that the traversals read (`_traversal.py`,
+`_native.py`):
 
 - `node_boxes (n, 12)`: for each interior node, the boxes of its two *children*
   `[lo0 (3), hi0 (3), lo1 (3), hi1 (3)]` (one row = one cache line in float32), so one gather
@@ -37,7 +38,7 @@ class BVH(eqx.Module):
 
     Build one with `build_bvh`; query it with `intersect_closest` / `intersect_any`. All
     array fields share one floating dtype (float32 by default, float64 for float64 input when
-    `jax_enable_x64` is on). See the module docstring of `radiometria.render._bvh` for the
+    `jax_enable_x64` is on). See the module docstring of `radiometria.render._geometry._bvh` for the
     layout.
 
     **Fields:**

@@ -1,6 +1,6 @@
 """Native CPU ray casting: C++ kernels called through XLA's FFI (`jax.ffi`) (thesis ch. 8).
 
-XLA:CPU runs the lockstep JAX traversal (`_intersect._traverse`) as a `while_loop` of many
+XLA:CPU runs the lockstep JAX traversal (`_traversal._traverse`) as a `while_loop` of many
 small kernels over a batch of lanes; on incoherent rays its per-iteration overhead and the
 lanes that idle in lockstep cost most of the time. On the CPU the same queries therefore run,
 by default, in `_csrc/bvh_traverse.cc`: one ray at a time, the same arithmetic operation for
@@ -10,15 +10,17 @@ XLA custom call: it works under `jit`, inside `while_loop` and `shard_map`, unde
 (a batch of ray batches becomes one flat call, see `_query_fn`) and under `grad` (its inputs
 pass through `stop_gradient`: hits are piecewise constant in the inputs, and derivatives are
 taken through the hit point recomputed from `prim` and the barycentrics). On other platforms
-(GPU, TPU) the JAX traversal runs.
+(GPU, TPU) the JAX traversal runs. `NativeCPUTraversal` is the back end (see `_backends.py`)
+that runs these kernels.
 
 The kernel is compiled on first use with the system's C++ compiler (`$CXX`, else `c++`,
 `g++` or `clang++`) against the FFI headers that ship with jaxlib (`jax.ffi.include_dir()`),
 and cached in `$RADIOMETRIA_CACHE_DIR` (default `$XDG_CACHE_HOME/radiometria`, else
 `~/.cache/radiometria`) under a name that hashes the source, the flags, the compiler, jaxlib
-and the host CPU; the library is written to a temporary file and renamed into place, so
-concurrent processes never load a partial file. Without a compiler, or with
-`RADIOMETRIA_NATIVE=0`, `native_status()` says why and the JAX traversal is used.
+and the host CPU; the library is written to a temporary file and renamed into place
+(`radiometria._io.atomic_write_path`), so concurrent processes never load a partial file. The
+outcome of the first build and load is kept for the process (`_load`). Without a compiler, or
+with `RADIOMETRIA_NATIVE=0`, `native_status()` says why and the JAX traversal is used.
 """
 
 import ctypes
@@ -29,17 +31,19 @@ import platform
 import shutil
 import subprocess
 import tempfile
-import threading
 from pathlib import Path
+from typing import ClassVar, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
 
-from .._checks import check_choice
+from ..._io import atomic_write_path, default_file_mode
+from ._backends import AbstractTraversalBackend
+from ._triangle import Hit, _sorted_corners
 
-__all__ = ["native_status"]
+__all__ = ["NativeCPUTraversal", "native_status"]
 
 _SOURCE = Path(__file__).with_name("_csrc") / "bvh_traverse.cc"
 # -ffp-contract=off: no fused multiply-adds, every operation rounds as written (the results do
@@ -60,8 +64,6 @@ _SYMBOLS = {
     for any_hit in (False, True)
     for dtype in ("float32", "float64")
 }
-_lock = threading.Lock()
-_state: dict = {}
 
 
 def _compiler() -> str | None:
@@ -120,50 +122,49 @@ def _build(cxx: str) -> Path:
         target = cache / target.name
         if target.exists():
             return target
-    fd, tmp = tempfile.mkstemp(prefix=".bvh_traverse-", suffix=".so", dir=cache)
-    os.close(fd)
-    try:
+
+    def compile_to(tmp: str) -> None:
         cmd = [cxx, *_FLAGS, f"-I{include}", str(_SOURCE), "-o", tmp]
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, check=False)
         if proc.returncode != 0:
             raise RuntimeError(f"`{' '.join(cmd)}` failed:\n{proc.stderr[-4000:]}")
-        os.replace(tmp, target)  # atomic: other processes see the whole file or none
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+
+    # atomic: other processes see the whole library or none
+    atomic_write_path(target, compile_to, mode=default_file_mode(executable=True))
     return target
 
 
-def _load() -> bool:
-    """Build, load and register the kernels once per process; True on success."""
-    with _lock:
-        if "ok" in _state:
-            return _state["ok"]
-        ok, reason = False, ""
-        if os.environ.get("RADIOMETRIA_NATIVE", "1").strip().lower() in ("0", "false", "no"):
-            reason = "disabled by RADIOMETRIA_NATIVE=0"
-        elif (cxx := _compiler()) is None:
-            reason = "no C++ compiler found ($CXX, c++, g++, clang++)"
-        else:
-            try:
-                lib = ctypes.cdll.LoadLibrary(str(_build(cxx)))
-                for symbol in _SYMBOLS.values():
-                    jax.ffi.register_ffi_target(
-                        symbol, jax.ffi.pycapsule(getattr(lib, symbol)), platform="cpu"
-                    )
-                _state["lib"] = lib  # keep the library loaded
-                ok, reason = True, "compiled and loaded"
-            except Exception as e:  # noqa: BLE001 - any failure means: use the JAX traversal
-                reason = f"build or load failed: {e}"
-        _state["ok"], _state["reason"] = ok, reason
-        return ok
+class _NativeLibrary(NamedTuple):
+    """The outcome of building and loading the kernels (`_load`)."""
+
+    ok: bool  # True when the kernels are registered with XLA
+    reason: str  # what happened, for `native_status`
+    lib: ctypes.CDLL | None  # the loaded library (held so that it stays loaded)
+
+
+@functools.cache
+def _load() -> _NativeLibrary:
+    """Build, load and register the kernels, once per process (later calls return the result)."""
+    if os.environ.get("RADIOMETRIA_NATIVE", "1").strip().lower() in ("0", "false", "no"):
+        return _NativeLibrary(False, "disabled by RADIOMETRIA_NATIVE=0", None)
+    if (cxx := _compiler()) is None:
+        return _NativeLibrary(False, "no C++ compiler found ($CXX, c++, g++, clang++)", None)
+    try:
+        lib = ctypes.cdll.LoadLibrary(str(_build(cxx)))
+        for symbol in _SYMBOLS.values():
+            jax.ffi.register_ffi_target(
+                symbol, jax.ffi.pycapsule(getattr(lib, symbol)), platform="cpu"
+            )
+    except Exception as e:  # noqa: BLE001 - any failure means: use the JAX traversal
+        return _NativeLibrary(False, f"build or load failed: {e}", None)
+    return _NativeLibrary(True, "compiled and loaded", lib)
 
 
 def native_status() -> tuple[bool, str]:
     """Whether the native CPU ray-casting kernels are available, and why (or why not).
 
     Compiles and loads the kernel on the first call (a few seconds, once per machine: the
-    library is cached; see the module docstring of `radiometria.render._native`).
+    library is cached; see the module docstring of `radiometria.render._geometry._native`).
 
     **Returns:**
 
@@ -176,20 +177,8 @@ def native_status() -> tuple[bool, str]:
         Ch. 8 (ray casting); the traversal of `Pharr2023` §7.3.5 and the tests of `Woop2013`
         and `Ize2013`, as in `intersect_closest`.
     """
-    ok = _load()
-    return ok, _state["reason"]
-
-
-def resolve_backend(backend: str) -> str:
-    """`"auto"` -> `"native"` on a CPU default backend when the kernel loads, else `"jax"`."""
-    check_choice(backend, "backend", ("auto", "native", "jax"))
-    if backend == "jax":
-        return "jax"
-    if backend == "native":
-        if not _load():
-            raise RuntimeError(f"the native BVH traversal is unavailable: {_state['reason']}.")
-        return "native"
-    return "native" if jax.default_backend() == "cpu" and _load() else "jax"
+    lib = _load()
+    return lib.ok, lib.reason
 
 
 def _threads() -> int:
@@ -254,3 +243,43 @@ def native_brute_query(rows, tri, o, d, tmin, tmax, *, any_hit: bool):
     symbol = _SYMBOLS[("Brute", any_hit, str(tri.dtype))]
     fn = _query_fn(symbol, 2, threads=_threads())
     return fn(*(lax.stop_gradient(x) for x in (rows, tri, o, d, tmin, tmax)))
+
+
+class NativeCPUTraversal(AbstractTraversalBackend):
+    """The queries in native C++ on the CPU (`_csrc/bvh_traverse.cc`), through XLA's FFI.
+
+    The BVH traversal runs one ray at a time with a per-ray stack; the brute force runs over
+    blocks of 256 rays held in cache, vectorised across rays. The arithmetic is that of the
+    JAX back end operation for operation (no fused multiply-adds), so both give the same hits;
+    only coplanar overlapping triangles (z-fighting) may resolve differently in the brute
+    force, where XLA contracts some products into fused multiply-adds. Available when the
+    kernel compiles and loads (`native_status`); `"auto"` picks it on the CPU.
+
+    !!! note "Thesis"
+        Ch. 8 (ray casting).
+
+    ??? cite "References"
+        `Pharr2023` §7.3.5 (BVH traversal); `Woop2013`; `Ize2013`.
+    """
+
+    platforms: ClassVar[tuple[str, ...]] = ("cpu",)
+
+    def available(self) -> tuple[bool, str]:
+        return native_status()
+
+    def bvh_closest(self, bvh, o, d, tmin, tmax):
+        t, prim, b1, b2 = native_query(bvh, o, d, tmin, tmax, any_hit=False)
+        return Hit(t=t, prim=prim, b1=b1, b2=b2)
+
+    def bvh_any(self, bvh, o, d, tmin, tmax):
+        return native_query(bvh, o, d, tmin, tmax, any_hit=True)[1] >= 0
+
+    def brute_closest(self, tri, o, d, tmin, tmax):
+        t, prim, b1, b2 = native_brute_query(
+            _sorted_corners(tri), tri, o, d, tmin, tmax, any_hit=False
+        )
+        return Hit(t=t, prim=prim, b1=b1, b2=b2)
+
+    def brute_any(self, tri, o, d, tmin, tmax):
+        hit = native_brute_query(_sorted_corners(tri), tri, o, d, tmin, tmax, any_hit=True)
+        return hit[1] >= 0

@@ -1,6 +1,6 @@
 // BVH traversal on the CPU as XLA FFI handlers (radiometria.render, thesis ch. 8).
 //
-// The same queries as the lockstep JAX traversal in `_intersect.py`, one ray at a time in
+// The same queries as the lockstep JAX traversal in `_traversal.py`, one ray at a time in
 // native code: XLA:CPU runs the JAX version as a while loop of many small kernels over a batch
 // of lanes, whose per-iteration overhead and lockstep waste dominate on incoherent rays. The
 // BVH layout is the one `build_bvh` writes (see `_bvh.py`): for each interior node the boxes
@@ -319,7 +319,7 @@ ffi::Error query(ffi::ThreadPool pool, ffi::Buffer<DT> boxes, ffi::Buffer<ffi::S
 
 // ---- brute force: every ray against every triangle, for scenes of a few dozen triangles -----
 //
-// The arithmetic of `_brute_loop` in `_intersect.py`: the corners of each triangle come sorted
+// The arithmetic of `_brute_loop` in `_traversal.py`: the corners of each triangle come sorted
 // in one global (lexicographic) order, rows (9, f), so a shared edge is evaluated on the same
 // operands in both triangles; a strict t < t_best keeps the lowest face index on ties. Rays
 // go in blocks of kBlock, structure of arrays in L1, and the loop over the rays of a block is
