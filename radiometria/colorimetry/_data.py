@@ -33,6 +33,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._checks import as_float_array, check_choice
+from ..radiometry import AbstractSpectrum
 
 _DATA_DIR = Path(__file__).parent / "data"
 PROVENANCE: dict = json.loads((_DATA_DIR / "provenance.json").read_text())
@@ -85,7 +86,7 @@ OBSERVER_ALIASES: dict[str, str] = {
 DEFAULT_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 
 
-class TabulatedSpectra(eqx.Module):
+class TabulatedSpectra(AbstractSpectrum):
     """One or more spectra tabulated on a common wavelength grid.
 
     - `wavelengths_nm`: strictly increasing sample wavelengths, shape (n,). [nm]
@@ -94,7 +95,9 @@ class TabulatedSpectra(eqx.Module):
     - `name`: the table's canonical name (static).
 
     Calling the object interpolates linearly: `spectra(wavelength_nm)` has shape
-    `wavelength_nm.shape` (one spectrum) or `wavelength_nm.shape + (k,)`.
+    `wavelength_nm.shape` (one spectrum) or `wavelength_nm.shape + (k,)`: a
+    `radiometry.AbstractSpectrum` whose channel axis, unlike a batch axis, comes last
+    (colour's convention for multi-spectral tables).
 
     ??? cite "References"
         `CIE2018` (the tabulated CMFs and illuminants); provenance in the module docstring.

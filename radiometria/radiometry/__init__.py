@@ -3,6 +3,9 @@
 - Blackbody radiation (section 1.5): `planck` (eq. 1.24, per nm), `planck_frequency` (per Hz),
   `planck_exitance` (eq. 1.23), `stefan_boltzmann_exitance` (eq. 1.22), and Wien's
   displacement law `planck_peak_wavelength` / `planck_peak_frequency`.
+- Spectra as callables (`Pharr2023` §4.5): `AbstractSpectrum` (the interface and batching rule
+  that every spectrum of the package follows), `ConstantSpectrum`, `PiecewiseLinearSpectrum`
+  (tabulated, zero outside) and `BlackbodySpectrum` (eq. 1.24, scaled).
 - Sampled spectra on nanometre grids: `integrate_spectrum` (trapezoid rule, irregular grids) and
   `resample_spectrum` (linear interpolation with an explicit extrapolation policy).
 - Closed-form relations between quantities (sections 1.1-1.4): irradiance from radiance over a
@@ -43,4 +46,10 @@ from ._quantities import (
 from ._spectra import (
     integrate_spectrum as integrate_spectrum,
     resample_spectrum as resample_spectrum,
+)
+from ._spectrum import (
+    AbstractSpectrum as AbstractSpectrum,
+    BlackbodySpectrum as BlackbodySpectrum,
+    ConstantSpectrum as ConstantSpectrum,
+    PiecewiseLinearSpectrum as PiecewiseLinearSpectrum,
 )

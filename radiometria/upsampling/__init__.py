@@ -26,7 +26,6 @@ from ._roundtrip import (
     roundtrip_statistics as roundtrip_statistics,
 )
 from ._sigmoid_polynomial import (
-    AbstractSpectrum as AbstractSpectrum,
     SigmoidPolynomialSpectrum as SigmoidPolynomialSpectrum,
     nm_to_normalised_coefficients as nm_to_normalised_coefficients,
     normalised_to_nm_coefficients as normalised_to_nm_coefficients,

@@ -14,15 +14,13 @@ Coefficients come in two conventions:
 (a linear change of variable of a quadratic).
 """
 
-import abc
-
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from ..radiometry import AbstractSpectrum
 
 # Normalised wavelength lambda' = (lambda - LAMBDA_MIN_NM) / (LAMBDA_MAX_NM - LAMBDA_MIN_NM).
 LAMBDA_MIN_NM = 360.0  # nm, lower end of the CIE 1931 tables and of the fit
@@ -188,20 +186,13 @@ def nm_to_normalised_coefficients(coeffs: ArrayLike) -> Array:
     return jnp.stack([c0 / (b * b), (2.0 * c0 * a + c1) / b, (c0 * a + c1) * a + c2], -1)
 
 
-class AbstractSpectrum(eqx.Module):
-    """A spectrum: a callable from wavelengths [nm] to spectral values (thesis section 2.2.3)."""
-
-    @abc.abstractmethod
-    def __call__(self, wavelength_nm: ArrayLike) -> Array:
-        """Spectral values at `wavelength_nm` [nm], broadcast as documented by the subclass."""
-
-
 class SigmoidPolynomialSpectrum(AbstractSpectrum):
     r"""The spectrum $S(\lambda) = s(c_0\lambda^2 + c_1\lambda + c_2)$, bounded in [0, 1].
 
-    A pytree holding nm coefficients, so batches of spectra are one object with `coeffs` of
-    shape (*batch, 3). Calling it evaluates the stable sigmoid (`sigmoid_jakob2019`):
-    `coeffs[..., 2] = +inf` with `c0 = c1 = 0` is the constant 1 and `-inf` the constant 0.
+    A `radiometry.AbstractSpectrum` holding nm coefficients, so batches of spectra are one
+    object with `coeffs` of shape (*batch, 3). Calling it evaluates the stable sigmoid
+    (`sigmoid_jakob2019`): `coeffs[..., 2] = +inf` with `c0 = c1 = 0` is the constant 1 and
+    `-inf` the constant 0.
 
     **Fields:**
 

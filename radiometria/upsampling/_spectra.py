@@ -14,19 +14,20 @@ sigmoid room on both sides; the spectrum is multiplied back by that scale.
   (1, 1, 1) is the space's white light with Y = 1 when XYZ is computed as
   $\int L \bar x\,d\lambda / \int \bar y\,d\lambda$.
 
-All three are equinox Modules holding only arrays (nm coefficients, scales, the illuminant
-table): batches of colours are one object, and they pass through `jit`, `vmap` and `grad`
-(the lookup is differentiable in rgb).
+All three are `radiometry.AbstractSpectrum` Modules holding only arrays (nm coefficients,
+scales, the illuminant table): batches of colours are one object, and they pass through
+`jit`, `vmap` and `grad` (the lookup is differentiable in rgb).
 """
 
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from ..radiometry import AbstractSpectrum
 from ._fit import _check_rgb_values
 from ._forward import forward_model
 from ._lut import RGBToSpectrumLUT, lookup
-from ._sigmoid_polynomial import AbstractSpectrum, _evaluate, common_float_dtype
+from ._sigmoid_polynomial import _evaluate, common_float_dtype
 
 
 def _rgb(rgb, upper):
