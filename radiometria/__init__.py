@@ -3,7 +3,8 @@
 Implements the thesis *Metodi di Monte Carlo Applicati Alla Computer Grafica*: chapter 1
 (radiometry, `radiometria.radiometry`), chapter 2 (photometry, colorimetry, RGB-to-spectrum
 upsampling, camera: `photometry`, `colorimetry`, `upsampling`, `camera`), chapter 3 (surfaces,
-`scattering`), chapters 5-7 (`montecarlo`) and chapters 8-9 (`render`).
+`scattering`), chapter 4 (participating media, `media`: interfaces), chapters 5-7
+(`montecarlo`) and chapters 8-9 (`render`).
 
 ```python
 import radiometria as rm
@@ -17,6 +18,7 @@ from . import (
     camera as camera,
     colorimetry as colorimetry,
     constants as constants,
+    media as media,
     montecarlo as montecarlo,
     photometry as photometry,
     radiometry as radiometry,

@@ -5,7 +5,8 @@ Subcommands:
 - `figures --out DIR [--only NAME ...] [--smoke]`: write every thesis figure (PNG and PDF).
 - `demo [--out DIR] [--spp N]`: render the Cornell box and write the figures into `./out`.
 - `lut build --space NAME --res N --out FILE`, `lut check FILE`: RGB-to-spectrum tables.
-- `render SCENE --spp N --out FILE [--width W --height H --seed S --max-depth D]`.
+- `render SCENE --spp N --out FILE [--width W --height H --seed S --max-depth D
+  --integrator NAME --sampler NAME]`.
 
 Each long task shows a progress bar on stderr (tqdm).
 """
@@ -118,6 +119,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--height", type=int, default=None, help="image height [scene's]")
     p.add_argument("--seed", type=int, default=0, help="random seed [0]")
     p.add_argument("--max-depth", type=int, default=None, help="maximum path depth [scene's]")
+    p.add_argument(
+        "--integrator",
+        default=None,
+        help="integrator plugin: 'path' or 'direct' (radiometria.render._registry) [scene's]",
+    )
+    p.add_argument(
+        "--sampler",
+        default="independent",
+        help="sampler plugin: 'independent' or 'sobol' (Owen-scrambled) [independent]",
+    )
     p.set_defaults(func=_render)
     return parser
 

@@ -6,9 +6,16 @@ channels R, G, B; `.png` is 8-bit sRGB-encoded) and whether the output can be wr
 """
 
 import argparse
+import importlib.metadata
 import os
 import tempfile
 from pathlib import Path
+
+from ..camera import write_exr, write_png
+from ._driver import render
+from ._integrators import AbstractIntegrator
+from ._registry import INTEGRATORS, SAMPLERS
+from ._scenes import load_scene
 
 __all__ = ["MAX_IMAGE_SIDE", "demo_render", "render_command"]
 
@@ -50,31 +57,58 @@ def _check_int(value, name: str, low: int, high: int | None = None) -> int | Non
 
 
 def _write(path: Path, rgb, metadata: dict) -> Path:
-    from ..camera import write_exr, write_png
-
     if path.suffix.lower() == ".exr":
         return write_exr(path, rgb, metadata)
     return write_png(path, rgb)
 
 
-def _render_to(scene_name: str, *, spp, width, height, seed, max_depth, progress=True):
-    from .. import __version__
-    from ._driver import render
+def _integrator(description, name: str | None, max_depth: int | None) -> AbstractIntegrator:
+    """The integrator of `--integrator` (default: the scene's), with `--max-depth` applied."""
+    name = description.integrator if name is None else name
+    if name not in INTEGRATORS:
+        raise ValueError(f"--integrator must be one of {sorted(INTEGRATORS)}, got {name!r}.")
+    cls = INTEGRATORS[name]
+    depth = description.max_depth if max_depth is None else max_depth
+    params = {"max_depth": -1 if depth is None else depth, "rr_depth": description.rr_depth}
+    if max_depth is not None and "max_depth" not in cls.PARAMETERS:
+        raise ValueError(f"--max-depth does not apply to the {name!r} integrator.")
+    params = {k: v for k, v in params.items() if k in cls.PARAMETERS}
+    return cls.from_properties(params, where=f"--integrator {name}")
 
+
+def _render_to(
+    scene_name: str,
+    *,
+    spp,
+    width,
+    height,
+    seed,
+    max_depth,
+    integrator=None,
+    sampler="independent",
+    progress=True,
+):
+    if sampler not in SAMPLERS:
+        raise ValueError(f"--sampler must be one of {sorted(SAMPLERS)}, got {sampler!r}.")
+    description = load_scene(scene_name)
+    chosen = _integrator(description, integrator, max_depth)
     rgb = render(
-        scene_name,
+        description,
         spp=spp,
         seed=seed,
         width=width,
         height=height,
-        max_depth=max_depth,
+        integrator=chosen,
+        sampler=SAMPLERS[sampler](),
         progress=progress,
     )
     metadata = {
-        "software": f"radiometria {__version__}",
+        "software": f"radiometria {importlib.metadata.version('radiometria')}",
         "scene": str(scene_name),
         "spp": int(spp),
         "seed": int(seed),
+        "integrator": chosen.NAME,
+        "sampler": sampler,
         "colorspace": "linear sRGB (Rec. 709 primaries, D65)",
     }
     if max_depth is not None:
@@ -95,7 +129,14 @@ def render_command(args: argparse.Namespace) -> int:
     max_depth = _check_int(args.max_depth, "max_depth", 1, 1024)
     out = _check_output(args.out)
     rgb, metadata = _render_to(
-        args.scene, spp=spp, width=width, height=height, seed=seed, max_depth=max_depth
+        args.scene,
+        spp=spp,
+        width=width,
+        height=height,
+        seed=seed,
+        max_depth=max_depth,
+        integrator=args.integrator,
+        sampler=args.sampler,
     )
     _write(out, rgb, metadata)
     print(out)

@@ -236,8 +236,8 @@ def render(
     seed: int = 0,
     width: int | None = None,
     height: int | None = None,
-    integrator: AbstractIntegrator | None = None,
-    sampler: AbstractSampler | None = None,
+    integrator=None,  # AbstractIntegrator | None; checked below with a message for strings
+    sampler=None,  # AbstractSampler | None
     batch: int | None = None,
     progress: bool = True,
     devices=None,

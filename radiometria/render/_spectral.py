@@ -149,7 +149,7 @@ class LinearRGB:
     - `rgb`: `(3,)` float64 linear sRGB components. [1, or the parameter's unit]
     """
 
-    rgb: np.ndarray
+    rgb: "np.ndarray | list[float] | tuple[float, float, float]"
 
     def __post_init__(self):
         object.__setattr__(self, "rgb", np.asarray(self.rgb, np.float64).reshape(3))

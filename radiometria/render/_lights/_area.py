@@ -66,7 +66,7 @@ class AreaLight(AbstractLight):
         area: np.ndarray,
         face_emitter: np.ndarray,
         radiance: "SpectrumTable | AbstractTexture",
-        emitter_two_sided: np.ndarray | None = None,
+        emitter_two_sided=None,
         *,
         dtype=jnp.float32,
     ) -> "AreaLight":
