@@ -82,12 +82,6 @@ def _amplitudes(cos_i: Array, eta: Array):
     return r_s, r_p, t_s, t_p, eta
 
 
-def _fr_dielectric(cos_i: Array, eta: Array) -> Array:
-    """Unchecked unpolarised dielectric reflectance (equal-rank inputs)."""
-    r_s, r_p, _, _, _ = _amplitudes(cos_i, eta)
-    return 0.5 * (r_s * r_s + r_p * r_p)
-
-
 def _fr_dielectric_snell(cos_i: Array, eta: Array, inv_eta: Array):
     r"""Unpolarised reflectance and Snell's law for the BxDFs' inner loop (unchecked).
 

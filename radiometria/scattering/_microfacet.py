@@ -177,11 +177,6 @@ class TrowbridgeReitzDistribution(eqx.Module):
         ok = den > 0
         return jnp.where(ok, 2.0 * zo * zi / jnp.where(ok, den, 1.0), 0.0)
 
-    def G_separable(self, wo, wi) -> Array:
-        """Separable Smith masking-shadowing $G_1(\\omega_o)G_1(\\omega_i)$ (Mitsuba 3)."""
-        a, b = align_ranks(self.G1(wo), self.G1(wi))
-        return a * b
-
     def D_visible(self, w, wm) -> Array:
         r"""Distribution of visible normals $D_\omega(\omega_m) = \frac{G_1(\omega)}{|\cos\theta|}
         D(\omega_m)\,|\omega\cdot\omega_m|$ (`Heitz2018`). [sr^-1]"""
