@@ -72,13 +72,17 @@ def _unit_clip(x: Array) -> Array:
     return jnp.clip(x, 0.0, 1.0 - jnp.finfo(x.dtype).epsneg)
 
 
-def sample_discrete(u: FloatLike, weights: FloatLike) -> tuple[Array, Array, Array]:
+def sample_discrete(
+    u: FloatLike, weights: FloatLike, *, check: bool = True
+) -> tuple[Array, Array, Array]:
     """Pick an index with probability proportional to `weights` and remap `u` for reuse.
 
     **Arguments:**
 
     - `u`: uniform variates, any shape, in [0, 1). [dimensionless]
     - `weights`: non-negative weights, shape `(k,)`, not all 0. [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -94,12 +98,12 @@ def sample_discrete(u: FloatLike, weights: FloatLike) -> tuple[Array, Array, Arr
     if w.ndim != 1 or w.shape[0] == 0:
         raise ValueError(f"`weights` must be a non-empty 1D array, got shape {w.shape}.")
     w = _check_table(w, "weights")  # before jit, so that concrete tables fail with ValueError
-    return _sample_discrete(as_float_array(u, "u"), w)
+    return _sample_discrete(as_float_array(u, "u"), w, check)
 
 
 @eqx.filter_jit
-def _sample_discrete(u: Array, w: Array) -> tuple[Array, Array, Array]:
-    u = check_unit_interval(u)
+def _sample_discrete(u: Array, w: Array, check: bool) -> tuple[Array, Array, Array]:
+    u = check_unit_interval(u) if check else u
     total = jnp.sum(w)
     cdf = jnp.concatenate([jnp.zeros((1,), w.dtype), jnp.cumsum(w) / total]).astype(u.dtype)
     idx = _find_interval(cdf[None, :], u)
@@ -153,19 +157,22 @@ class PiecewiseConstant1D(eqx.Module):
         return self.func.shape[0]
 
     @eqx.filter_jit
-    def sample(self, u: FloatLike) -> tuple[Array, Array, Array]:
+    def sample(self, u: FloatLike, *, check: bool = True) -> tuple[Array, Array, Array]:
         """Sample `x` by inverting the CDF.
 
         **Arguments:**
 
         - `u`: uniform variates, any shape, in [0, 1). [dimensionless]
+        - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+            callers that validated already, such as the renderer's inner loop. [bool]
 
         **Returns:**
 
         `(x, pdf, offset)`: the samples [unit of x], their density [1/unit of x], and the int32
         bin index.
         """
-        u = check_unit_interval(as_float_array(u, "u"))
+        u = as_float_array(u, "u")
+        u = check_unit_interval(u) if check else u
         cdf = self.cdf.astype(u.dtype)
         o = _find_interval(cdf[None, :], u)
         c0, c1 = cdf[o], cdf[o + 1]
@@ -263,21 +270,24 @@ class PiecewiseConstant2D(eqx.Module):
         return self.marginal.integral
 
     def sample(
-        self, u: FloatLike
+        self, u: FloatLike, *, check: bool = True
     ) -> tuple[Float[Array, "*batch 2"], Array, Int[Array, "*batch 2"]]:
         """Sample a point by the marginal-then-conditional inversion.
 
         **Arguments:**
 
         - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
+        - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+            callers that validated already, such as the renderer's inner loop. [bool]
 
         **Returns:**
 
         `(p, pdf, offset)`: points `(..., 2)` [unit of x, y], density [1/area], and the int32
         `(column, row)` cell indices `(..., 2)`.
         """
-        u = check_unit_interval(check_last_axis(as_float_array(u, "u"), "u", 2))
-        y, pdf_y, iv = self.marginal.sample(u[..., 1])
+        u = check_last_axis(as_float_array(u, "u"), "u", 2)
+        u = check_unit_interval(u) if check else u
+        y, pdf_y, iv = self.marginal.sample(u[..., 1], check=False)
         cdf = self.conditional_cdf.astype(u.dtype)
         nu = self.func.shape[1]
         u0 = u[..., 0]

@@ -54,15 +54,17 @@ def _unit_points(method: str, n: int, d: int, key: Key) -> Array:
 
 
 def _domain_map(domain, d_box: int | None):
-    """-> (dim of variates, map u -> points, volume or 1/pdf factor)."""
+    """-> (dim of variates, map u -> points, volume or 1/pdf factor).
+
+    The variates come from this module's own point sets, so the warps skip their check."""
     from ._warps import sample_uniform_hemisphere, sample_uniform_sphere
 
     if isinstance(domain, str):
         check_choice(domain, "domain", ["hemisphere", "sphere", "unit_cube"])
         if domain == "hemisphere":
-            return 2, sample_uniform_hemisphere, 2 * jnp.pi
+            return 2, lambda u: sample_uniform_hemisphere(u, check=False), 2 * jnp.pi
         if domain == "sphere":
-            return 2, sample_uniform_sphere, 4 * jnp.pi
+            return 2, lambda u: sample_uniform_sphere(u, check=False), 4 * jnp.pi
         if d_box is None:
             raise ValueError("domain='unit_cube' needs `dim`.")
         return d_box, lambda u: u, 1.0

@@ -9,10 +9,11 @@ Every warp comes as a pbrt-style triad (style.md section 3):
   through the warp.
 
 The formulas follow `Pharr2023` (pbrt-v4, `util/sampling.h`, ch. A.5 and 2.2) unless stated.
-Variates are checked to lie in [0, 1) with `equinox.error_if`; set `EQX_ON_ERROR=nan` to skip
-the check's error in hot loops. Each public warp is wrapped in `equinox.filter_jit`: called eagerly
-it compiles once per shape instead of dispatching dozens of tiny operations, and inside a caller's
-`jit` it is simply inlined.
+Variates are checked to lie in [0, 1) with `equinox.error_if`; every `sample_X` takes a static
+keyword `check=False` that skips the check for callers that validated their variates already
+(checks at the entry point, not in the renderer's inner loop; the results are identical). Each
+public warp is wrapped in `equinox.filter_jit`: called eagerly it compiles once per shape instead
+of dispatching dozens of tiny operations, and inside a caller's `jit` it is simply inlined.
 """
 
 import math
@@ -33,11 +34,13 @@ PI_OVER_2 = 0.5 * math.pi
 PI_OVER_4 = 0.25 * math.pi
 
 
-def _u(u, k: int | None = None, name: str = "u") -> Array:
+def _u(u, k: int | None = None, name: str = "u", *, check: bool = True) -> Array:
+    """`u` as a float array with `k` entries on its last axis; its values are checked to lie in
+    [0, 1) (`eqx.error_if`) unless `check` is False. The shape check is static and always runs."""
     u = as_float_array(u, name)
     if k is not None:
         check_last_axis(u, name, k)
-    return check_unit_interval(u, name)
+    return check_unit_interval(u, name) if check else u
 
 
 def _safe_sqrt(x: Array) -> Array:
@@ -70,12 +73,14 @@ def _frac_to_unit(x: Array) -> Array:
 
 
 @eqx.filter_jit
-def sample_uniform_disk_polar(u: FloatLike) -> Float[Array, "*batch 2"]:
+def sample_uniform_disk_polar(u: FloatLike, *, check: bool = True) -> Float[Array, "*batch 2"]:
     r"""Uniform point on the unit disk by the polar map $r = \sqrt{u_0}$, $\phi = 2\pi u_1$.
 
     **Arguments:**
 
     - `u`: uniform variates, shape `(..., 2)`, in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -85,7 +90,7 @@ def sample_uniform_disk_polar(u: FloatLike) -> Float[Array, "*batch 2"]:
         `Pharr2023` §A.5.1.
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     r = jnp.sqrt(u[..., 0])
     theta = 2 * PI * u[..., 1]
     return jnp.stack([r * jnp.cos(theta), r * jnp.sin(theta)], axis=-1)
@@ -137,7 +142,7 @@ def invert_uniform_disk_polar_sample(p: FloatLike) -> Float[Array, "*batch 2"]:
 
 
 @eqx.filter_jit
-def sample_uniform_disk_concentric(u: FloatLike) -> Float[Array, "*batch 2"]:
+def sample_uniform_disk_concentric(u: FloatLike, *, check: bool = True) -> Float[Array, "*batch 2"]:
     """Uniform point on the unit disk by Shirley and Chiu's concentric map.
 
     The map takes concentric squares of [-1, 1]^2 to concentric circles, so it keeps the
@@ -146,6 +151,8 @@ def sample_uniform_disk_concentric(u: FloatLike) -> Float[Array, "*batch 2"]:
     **Arguments:**
 
     - `u`: uniform variates, shape `(..., 2)`, in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -155,7 +162,7 @@ def sample_uniform_disk_concentric(u: FloatLike) -> Float[Array, "*batch 2"]:
         `Shirley1997`; `Pharr2023` §A.5.1.
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     o = 2.0 * u - 1.0
     ox, oy = o[..., 0], o[..., 1]
     x_major = jnp.abs(ox) > jnp.abs(oy)
@@ -209,7 +216,7 @@ def invert_uniform_disk_concentric_sample(p: FloatLike) -> Float[Array, "*batch 
 
 
 @eqx.filter_jit
-def sample_cosine_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
+def sample_cosine_hemisphere(u: FloatLike, *, check: bool = True) -> Float[Array, "*batch 3"]:
     r"""Cosine-weighted direction on the +z hemisphere (Malley's method).
 
     A concentric disk sample is lifted to the hemisphere, $z = \sqrt{1 - x^2 - y^2}$.
@@ -217,6 +224,8 @@ def sample_cosine_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
     **Arguments:**
 
     - `u`: uniform variates, shape `(..., 2)`, in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -227,7 +236,7 @@ def sample_cosine_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
         `Pharr2023` §A.5.3; `Shirley1997`.
         Thesis ch. 5.
     """
-    d = sample_uniform_disk_concentric(u)
+    d = sample_uniform_disk_concentric(u, check=check)
     z = _safe_sqrt(1.0 - d[..., 0] ** 2 - d[..., 1] ** 2)
     return jnp.concatenate([d, z[..., None]], axis=-1)
 
@@ -273,12 +282,14 @@ def invert_cosine_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
 
 
 @eqx.filter_jit
-def sample_uniform_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
+def sample_uniform_hemisphere(u: FloatLike, *, check: bool = True) -> Float[Array, "*batch 3"]:
     """Uniform direction on the +z hemisphere: `z = u0`, `phi = 2 pi u1`.
 
     **Arguments:**
 
     - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -288,7 +299,7 @@ def sample_uniform_hemisphere(u: FloatLike) -> Float[Array, "*batch 3"]:
         `Pharr2023` §A.5.2.
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     z = u[..., 0]
     r = _safe_sqrt(1.0 - z * z)
     phi = 2 * PI * u[..., 1]
@@ -339,12 +350,14 @@ def invert_uniform_hemisphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
 
 
 @eqx.filter_jit
-def sample_uniform_sphere(u: FloatLike) -> Float[Array, "*batch 3"]:
+def sample_uniform_sphere(u: FloatLike, *, check: bool = True) -> Float[Array, "*batch 3"]:
     """Uniform direction on the unit sphere: `z = 1 - 2 u0`, `phi = 2 pi u1`.
 
     **Arguments:**
 
     - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -354,7 +367,7 @@ def sample_uniform_sphere(u: FloatLike) -> Float[Array, "*batch 3"]:
         `Pharr2023` §A.5.2.
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     z = 1.0 - 2.0 * u[..., 0]
     r = _safe_sqrt(1.0 - z * z)
     phi = 2 * PI * u[..., 1]
@@ -405,7 +418,9 @@ def invert_uniform_sphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
 
 
 @eqx.filter_jit
-def sample_uniform_cone(u: FloatLike, cos_theta_max: FloatLike) -> Float[Array, "*batch 3"]:
+def sample_uniform_cone(
+    u: FloatLike, cos_theta_max: FloatLike, *, check: bool = True
+) -> Float[Array, "*batch 3"]:
     r"""Uniform direction in the cone of half-angle $\theta_{max}$ around +z.
 
     $\cos\theta = (1 - u_0) + u_0 \cos\theta_{max}$, $\phi = 2\pi u_1$.
@@ -414,6 +429,8 @@ def sample_uniform_cone(u: FloatLike, cos_theta_max: FloatLike) -> Float[Array, 
 
     - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
     - `cos_theta_max`: cosine of the half-angle, in [-1, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -423,7 +440,7 @@ def sample_uniform_cone(u: FloatLike, cos_theta_max: FloatLike) -> Float[Array, 
         `Pharr2023` §A.5.4.
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     c = as_float_array(cos_theta_max, "cos_theta_max")
     cos_t = (1.0 - u[..., 0]) + u[..., 0] * c
     sin_t = _safe_sqrt(1.0 - cos_t * cos_t)
@@ -486,7 +503,7 @@ def invert_uniform_cone_sample(w: FloatLike, cos_theta_max: FloatLike) -> Float[
 
 
 @eqx.filter_jit
-def sample_uniform_triangle(u: FloatLike) -> Float[Array, "*batch 3"]:
+def sample_uniform_triangle(u: FloatLike, *, check: bool = True) -> Float[Array, "*batch 3"]:
     """Uniform barycentric coordinates `(b0, b1, b2)` on a triangle (Heitz's low-distortion map).
 
     The point `b0 p0 + b1 p1 + b2 p2` is uniform over the triangle's area for any vertices.
@@ -494,6 +511,8 @@ def sample_uniform_triangle(u: FloatLike) -> Float[Array, "*batch 3"]:
     **Arguments:**
 
     - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -504,7 +523,7 @@ def sample_uniform_triangle(u: FloatLike) -> Float[Array, "*batch 3"]:
         `Heitz2019`; `Pharr2023` §A.5.5.
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     u0, u1 = u[..., 0], u[..., 1]
     first = u0 < u1
     b0 = jnp.where(first, u0 / 2, u0 - u1 / 2)
@@ -633,7 +652,7 @@ def spherical_triangle_area(a: FloatLike, b: FloatLike, c: FloatLike) -> Array:
 
 @eqx.filter_jit
 def sample_spherical_triangle(
-    u: FloatLike, a: FloatLike, b: FloatLike, c: FloatLike
+    u: FloatLike, a: FloatLike, b: FloatLike, c: FloatLike, *, check: bool = True
 ) -> Float[Array, "*batch 3"]:
     """Uniform direction inside the spherical triangle `(a, b, c)` (Arvo 1995).
 
@@ -644,6 +663,8 @@ def sample_spherical_triangle(
     - `u`: uniform variates `(..., 2)` in [0, 1). [dimensionless]
     - `a`, `b`, `c`: vertex directions `(..., 3)`, normalised here; seen from the origin.
         [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -654,7 +675,7 @@ def sample_spherical_triangle(
         `Arvo1995`; `Pharr2023` §6.5.4 (`SampleSphericalTriangle`).
         Thesis ch. 5.
     """
-    u = _u(u, 2)
+    u = _u(u, 2, check=check)
     a, b, c, u = _vertices(a, b, c, u)
     _, alpha, beta, gamma = _sph_tri_setup(a, b, c)
     a_pi = alpha + beta + gamma
@@ -751,13 +772,15 @@ def invert_spherical_triangle_sample(
 
 
 @eqx.filter_jit
-def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike) -> Array:
+def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike, *, check: bool = True) -> Array:
     r"""Sample $x \in [0, 1)$ with density proportional to the line $(1-x) a + x b$.
 
     **Arguments:**
 
     - `u`: uniform variates in [0, 1). [dimensionless]
     - `a`, `b`: non-negative values of the line at 0 and 1, not both 0. [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -767,7 +790,7 @@ def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike) -> Array:
         `Pharr2023` §2.3.1 (`SampleLinear`).
         Thesis ch. 5.
     """
-    u = _u(u)
+    u = _u(u, check=check)
     a = as_float_array(a, "a")
     b = as_float_array(b, "b")
     den = a + _safe_sqrt((1.0 - u) * a * a + u * b * b)
@@ -824,7 +847,7 @@ def invert_linear_sample(x: FloatLike, a: FloatLike, b: FloatLike) -> Array:
 
 
 @eqx.filter_jit
-def sample_tent(u: FloatLike, radius: FloatLike) -> Array:
+def sample_tent(u: FloatLike, radius: FloatLike, *, check: bool = True) -> Array:
     """Sample the tent (triangle) density of half-width `radius` centred at 0.
 
     The first half of [0, 1) samples the left half of the tent, the second half the right.
@@ -833,6 +856,8 @@ def sample_tent(u: FloatLike, radius: FloatLike) -> Array:
 
     - `u`: uniform variates in [0, 1). [dimensionless]
     - `radius`: half-width r > 0. [same unit as the result]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -842,13 +867,13 @@ def sample_tent(u: FloatLike, radius: FloatLike) -> Array:
         `Pharr2023` §2.3.1 (`SampleTent`).
         Thesis ch. 5 and eq. 2.31.
     """
-    u = _u(u)
+    u = _u(u, check=check)
     r = as_float_array(radius, "radius")
     left = u < 0.5
     u_left = jnp.minimum(2 * u, 1.0 - jnp.finfo(u.dtype).epsneg)
     u_right = jnp.clip(2 * u - 1.0, 0.0, 1.0 - jnp.finfo(u.dtype).epsneg)
-    x_left = -r + r * sample_linear(jnp.where(left, u_left, 0.0), 0.0, 1.0)
-    x_right = r * sample_linear(jnp.where(left, 0.0, u_right), 1.0, 0.0)
+    x_left = -r + r * sample_linear(jnp.where(left, u_left, 0.0), 0.0, 1.0, check=False)
+    x_right = r * sample_linear(jnp.where(left, 0.0, u_right), 1.0, 0.0, check=False)
     return jnp.where(left, x_left, x_right)
 
 
@@ -900,13 +925,15 @@ def invert_tent_sample(x: FloatLike, radius: FloatLike) -> Array:
 
 
 @eqx.filter_jit
-def sample_exponential(u: FloatLike, a: FloatLike) -> Array:
+def sample_exponential(u: FloatLike, a: FloatLike, *, check: bool = True) -> Array:
     """Sample the exponential density `a exp(-a x)` on [0, inf): `x = -log(1 - u) / a`.
 
     **Arguments:**
 
     - `u`: uniform variates in [0, 1). [dimensionless]
     - `a`: rate, > 0. [1/unit of x, e.g. m^-1 for free-flight distances]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -916,7 +943,7 @@ def sample_exponential(u: FloatLike, a: FloatLike) -> Array:
         `Pharr2023` §A.4.2 (`SampleExponential`).
         Thesis ch. 5.
     """
-    u = _u(u)
+    u = _u(u, check=check)
     a = as_float_array(a, "a")
     return -jnp.log1p(-u) / a
 
@@ -982,7 +1009,7 @@ _VIS_NORM = _VIS_K / (_VIS_T0 + _VIS_T1)  # 0.0039398042... nm^-1
 
 
 @eqx.filter_jit
-def sample_visible_wavelengths(u: FloatLike) -> Array:
+def sample_visible_wavelengths(u: FloatLike, *, check: bool = True) -> Array:
     r"""Sample wavelengths in [360, 830] nm with pbrt-v4's visible-light density.
 
     $\lambda = 538 - \operatorname{atanh}(0.85691062 - 1.82750197 u)/0.0072$, the inverse CDF
@@ -992,6 +1019,8 @@ def sample_visible_wavelengths(u: FloatLike) -> Array:
     **Arguments:**
 
     - `u`: uniform variates in [0, 1). [dimensionless]
+    - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
+        callers that validated already, such as the renderer's inner loop. [bool]
 
     **Returns:**
 
@@ -1001,7 +1030,7 @@ def sample_visible_wavelengths(u: FloatLike) -> Array:
         `Pharr2023` §4.6.2 (`SampleVisibleWavelengths`); `Radziszewski2009`.
         Thesis ch. 5.
     """
-    u = _u(u)
+    u = _u(u, check=check)
     t = _VIS_T0 - (_VIS_T0 + _VIS_T1) * u
     lam = _VIS_MU - jnp.arctanh(t) / _VIS_K
     return jnp.clip(lam, VISIBLE_MIN_NM, VISIBLE_MAX_NM)

@@ -95,6 +95,28 @@ def test_tables_reject_bad_input():
         mc.PiecewiseConstant1D(TABLE_1D).sample(jnp.array([1.2]))
 
 
+def test_tables_check_false_identical_and_check_true_raises_under_jit():
+    d1 = mc.PiecewiseConstant1D(TABLE_1D, 360.0, 830.0)
+    d2 = mc.PiecewiseConstant2D(TABLE_2D, bounds=((0.0, 2.0), (-1.0, 1.0)))
+    w = jnp.array([1.0, 0.0, 3.0])
+    u1 = jax.random.uniform(jax.random.key(32), (257,))
+    u2 = jax.random.uniform(jax.random.key(33), (257, 2))
+    cases = [
+        (lambda u, check: d1.sample(u, check=check), u1),
+        (lambda u, check: d2.sample(u, check=check), u2),
+        (lambda u, check: mc.sample_discrete(u, w, check=check), u1),
+    ]
+    for fn, u in cases:
+        checked = jax.jit(lambda u, fn=fn: fn(u, True))(u)
+        unchecked = jax.jit(lambda u, fn=fn: fn(u, False))(u)
+        for a, b in zip(unchecked, checked, strict=True):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+        bad = u.at[3].set(1.0)
+        with pytest.raises(eqx.EquinoxRuntimeError, match="u"):
+            jax.block_until_ready(eqx.filter_jit(lambda u, fn=fn: fn(u, True))(bad))
+        jax.block_until_ready(jax.jit(lambda u, fn=fn: fn(u, False))(bad))
+
+
 def test_stratified_one_point_per_cell():
     x = np.asarray(mc.stratified((4, 5, 3), key=jax.random.key(5)))
     assert x.shape == (60, 3)

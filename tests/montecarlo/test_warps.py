@@ -272,6 +272,43 @@ def test_warps_reject_u_outside_unit_interval():
         mc.sample_visible_wavelengths(jnp.array([1.5]))
 
 
+# Every sampling warp: (function, length of the last axis of `u` or None, extra arguments).
+CHECKED_WARPS = {
+    "disk_polar": (mc.sample_uniform_disk_polar, 2, ()),
+    "disk_concentric": (mc.sample_uniform_disk_concentric, 2, ()),
+    "cosine_hemisphere": (mc.sample_cosine_hemisphere, 2, ()),
+    "uniform_hemisphere": (mc.sample_uniform_hemisphere, 2, ()),
+    "uniform_sphere": (mc.sample_uniform_sphere, 2, ()),
+    "uniform_cone": (mc.sample_uniform_cone, 2, (COS_MAX,)),
+    "uniform_triangle": (mc.sample_uniform_triangle, 2, ()),
+    "spherical_triangle": (mc.sample_spherical_triangle, 2, (TA, TB, TC)),
+    "linear": (mc.sample_linear, None, (1.0, 3.0)),
+    "tent": (mc.sample_tent, None, (1.5,)),
+    "exponential": (mc.sample_exponential, None, (2.0,)),
+    "visible_wavelengths": (mc.sample_visible_wavelengths, None, ()),
+}
+
+
+@pytest.mark.parametrize("name", sorted(CHECKED_WARPS))
+def test_warp_check_false_identical_and_check_true_raises_under_jit(name):
+    fn, k, args = CHECKED_WARPS[name]
+    u = jax.random.uniform(jax.random.key(31), (257, k) if k else (257,))
+    checked = jax.jit(lambda u: fn(u, *args))(u)
+    unchecked = jax.jit(lambda u: fn(u, *args, check=False))(u)
+    np.testing.assert_array_equal(np.asarray(unchecked), np.asarray(checked))
+    eager = fn(u, *args)  # (eager and jitted differ by constant folding of `args`, not `check`)
+    np.testing.assert_array_equal(np.asarray(fn(u, *args, check=False)), np.asarray(eager))
+    bad = u.at[3].set(1.0)
+    with pytest.raises(eqx.EquinoxRuntimeError, match="u"):
+        jax.block_until_ready(eqx.filter_jit(lambda u: fn(u, *args))(bad))
+    with pytest.raises(eqx.EquinoxRuntimeError, match="u"):
+        jax.block_until_ready(
+            eqx.filter_jit(lambda u: fn(u, *args, check=True))(u.at[5].set(-0.25))
+        )
+    # check=False leaves validation to the caller: no error, whatever comes out.
+    jax.block_until_ready(jax.jit(lambda u: fn(u, *args, check=False))(bad))
+
+
 def test_warps_reject_wrong_shapes_and_dtypes():
     with pytest.raises(ValueError, match="last axis of length 2"):
         mc.sample_uniform_disk_concentric(jnp.zeros((4, 3)))
