@@ -13,7 +13,7 @@ from ..camera import (
     PinholeCamera,
     TentFilter,
 )
-from ._accelerators import BruteForceAccelerator, BVHAccelerator
+from ._accelerators import ACCELERATORS
 from ._integrators import Direct, Path
 from ._lights import AreaLight
 from ._materials import (
@@ -28,7 +28,7 @@ from ._samplers import Independent, OwenSobol
 from ._textures import ConstantTexture
 
 __all__ = [
-    "ACCELERATORS",
+    "ACCELERATORS",  # from _accelerators
     "CAMERAS",
     "FILTERS",
     "INTEGRATORS",
@@ -64,5 +64,5 @@ FILTERS = {
     "catmullrom": MitchellFilter,
     "lanczos": LanczosFilter,
 }
-# `RenderScene.from_triangles(accelerator=...)`; "auto" picks brute force for tiny scenes.
-ACCELERATORS = {"brute_force": BruteForceAccelerator, "bvh": BVHAccelerator}
+# `RenderScene.from_triangles(accelerator=...)` ("auto" picks brute force for tiny scenes) is
+# `radiometria.render._accelerators.ACCELERATORS`, re-exported here with the others.

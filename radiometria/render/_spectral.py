@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ..montecarlo import sample_visible_wavelengths, visible_wavelengths_pdf
 from ..radiometry import AbstractSpectrum, PiecewiseLinearSpectrum
 from ..upsampling import (
@@ -36,8 +37,6 @@ from ..upsampling import (
 
 __all__ = [
     "N_HERO_WAVELENGTHS",
-    "WAVELENGTH_MAX_NM",
-    "WAVELENGTH_MIN_NM",
     "LinearRGB",
     "SpectrumTable",
     "sample_hero_wavelengths",
@@ -45,8 +44,6 @@ __all__ = [
     "wavelength_grid_nm",
 ]
 
-WAVELENGTH_MIN_NM = 360.0  # nm, lower end of PBRT's and Mitsuba's visible range
-WAVELENGTH_MAX_NM = 830.0  # nm, upper end
 N_HERO_WAVELENGTHS = 4  # wavelengths carried by one path (PBRT's NSpectrumSamples, Mitsuba's)
 _GRID_STEP_NM = 1.0
 
@@ -61,8 +58,8 @@ def wavelength_grid_nm() -> np.ndarray:
     ??? cite "References"
         `Pharr2023` §4.4 (the visible range 360-830 nm).
     """
-    n = int(round((WAVELENGTH_MAX_NM - WAVELENGTH_MIN_NM) / _GRID_STEP_NM)) + 1
-    return WAVELENGTH_MIN_NM + _GRID_STEP_NM * np.arange(n, dtype=np.float64)
+    n = int(round((VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM) / _GRID_STEP_NM)) + 1
+    return VISIBLE_WAVELENGTH_MIN_NM + _GRID_STEP_NM * np.arange(n, dtype=np.float64)
 
 
 class SpectrumTable(eqx.Module):
@@ -95,7 +92,7 @@ class SpectrumTable(eqx.Module):
         self, row: Int[Array, "*batch"], wavelength_nm: Float[Array, "*batch k"]
     ) -> Float[Array, "*batch k"]:
         n = self.values.shape[1]
-        x = (wavelength_nm - WAVELENGTH_MIN_NM) / _GRID_STEP_NM
+        x = (wavelength_nm - VISIBLE_WAVELENGTH_MIN_NM) / _GRID_STEP_NM
         x = jnp.clip(x, 0.0, n - 1.0)
         i = jnp.minimum(jnp.floor(x).astype(jnp.int32), n - 2)
         t = (x - i.astype(x.dtype)).astype(self.values.dtype)

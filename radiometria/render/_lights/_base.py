@@ -18,6 +18,9 @@ class LightSample(eqx.Module):
         [W m^-2 sr^-1 nm^-1]
     - `pdf`: density of the sample per unit solid angle at the shading point `(n,)`; 0 marks
         a failed sample. [sr^-1]
+
+    ??? cite "References"
+        `Pharr2023` §12.1 (`LightLiSample`).
     """
 
     wi: Float[Array, "n 3"]

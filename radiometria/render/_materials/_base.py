@@ -106,6 +106,12 @@ class ScaledBxDF(AbstractBxDF):
     multiplied by `reflection` where `wo` and `wi` lie on one side, by `transmission`
     otherwise; sampling and densities are the base BxDF's (the factors are not importance
     sampled, as in Mitsuba).
+
+    !!! note "Thesis"
+        Eq. 3.4 (the BxDF), section 3.1.1 (reflected and transmitted parts).
+
+    ??? cite "References"
+        `Jakob2022` (`specular_reflectance`, `specular_transmittance`).
     """
 
     base: AbstractBxDF

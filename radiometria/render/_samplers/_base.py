@@ -12,7 +12,19 @@ __all__ = ["AbstractSampler", "sampler_seed"]
 
 
 def sampler_seed(key) -> UInt32[Array, "2"]:
-    """The two uint32 words that seed the samplers, derived from a `jax.random` key."""
+    """The two uint32 words that seed the samplers, derived from a `jax.random` key.
+
+    **Arguments:**
+
+    - `key`: a `jax.random` key (the render's seed). [key]
+
+    **Returns:**
+
+    `(2,)` uint32 words, computed once per render outside the loops. [1]
+
+    !!! note "Thesis"
+        Appendix C (pseudo-random numbers): the seed of the counter-based samplers.
+    """
     return jax.random.key_data(jax.random.fold_in(key, 0x50B01)).reshape(-1)[:2].astype(jnp.uint32)
 
 

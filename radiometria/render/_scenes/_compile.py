@@ -25,7 +25,15 @@ _FILTER_ARGS = {
 
 
 def scene_filter(description: SceneDescription) -> AbstractFilter:
-    """The reconstruction filter of the scene's film (`FILTERS` registry, thesis 2.3.2)."""
+    """The reconstruction filter of the scene's film (`FILTERS` registry).
+
+    **Arguments:**
+
+    - `description`: a `SceneDescription` (its film's filter and parameters, [px]).
+
+    !!! note "Thesis"
+        Section 2.3.2 (filtering image samples).
+    """
     film = description.film
     if film.filter not in FILTERS:
         raise SceneError(
@@ -40,7 +48,20 @@ def scene_filter(description: SceneDescription) -> AbstractFilter:
 
 
 def scene_integrator(description: SceneDescription) -> AbstractIntegrator:
-    """The integrator the scene file asks for (`INTEGRATORS` registry), with its settings."""
+    """The integrator the scene file asks for (`INTEGRATORS` registry), with its settings.
+
+    **Arguments:**
+
+    - `description`: a `SceneDescription` (its `integrator` name, `max_depth` and `rr_depth`
+        [path segments]; an unbounded depth becomes 64 segments).
+
+    **Returns:**
+
+    An `AbstractIntegrator`, e.g. `Path(max_depth=8, rr_depth=5)` for the Cornell box.
+
+    !!! note "Thesis"
+        Chapters 8-9 (light transport).
+    """
     depth = description.max_depth
     params = {
         "max_depth": DEFAULT_UNBOUNDED_DEPTH if depth is None else depth,
