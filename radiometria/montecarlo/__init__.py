@@ -55,8 +55,6 @@ from ._samplers import (
 )
 from ._sobol import sobol as sobol
 from ._warps import (
-    VISIBLE_MAX_NM as VISIBLE_MAX_NM,
-    VISIBLE_MIN_NM as VISIBLE_MIN_NM,
     cosine_hemisphere_pdf as cosine_hemisphere_pdf,
     exponential_pdf as exponential_pdf,
     invert_cosine_hemisphere_sample as invert_cosine_hemisphere_sample,

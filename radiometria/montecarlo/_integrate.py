@@ -19,20 +19,18 @@ from jax import Array
 from .._checks import check_choice, check_positive_int
 from .._types import Key
 from ._estimators import Estimate, _terms_estimate, _values
+from ._halton import halton
+from ._samplers import hash_uniform, latin_hypercube, rank1_lattice, stratified
+from ._sobol import sobol
+from ._warps import sample_uniform_hemisphere, sample_uniform_sphere
 
 _METHODS = ("mc", "stratified", "lhs", "sobol", "halton", "lattice")
 
 
 def _unit_points(method: str, n: int, d: int, key: Key) -> Array:
-    from ._halton import halton
-    from ._samplers import latin_hypercube, rank1_lattice
-    from ._sobol import sobol
-
     dtype = jnp.result_type(float)
     if method == "mc":
         # Counter-based hash uniforms: independent, and fused with the integrand by XLA.
-        from ._samplers import hash_uniform
-
         return hash_uniform(key, n, d, dtype)
     if method == "lhs":
         return latin_hypercube(n, d, key=key)
@@ -48,8 +46,6 @@ def _unit_points(method: str, n: int, d: int, key: Key) -> Array:
         raise ValueError(
             f"method='stratified' needs n = s^d; got n = {n}, d = {d} (try n = {s**d})."
         )
-    from ._samplers import stratified
-
     return stratified((s,) * d, key=key)
 
 
@@ -57,8 +53,6 @@ def _domain_map(domain, d_box: int | None):
     """-> (dim of variates, map u -> points, volume or 1/pdf factor).
 
     The variates come from this module's own point sets, so the warps skip their check."""
-    from ._warps import sample_uniform_hemisphere, sample_uniform_sphere
-
     if isinstance(domain, str):
         check_choice(domain, "domain", ["hemisphere", "sphere", "unit_cube"])
         if domain == "hemisphere":

@@ -24,7 +24,9 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_last_axis, check_unit_interval
+from .._math import dot, safe_div, safe_sqrt
 from .._types import Float, FloatLike
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 
 PI = math.pi
 INV_PI = 1.0 / math.pi
@@ -41,17 +43,6 @@ def _u(u, k: int | None = None, name: str = "u", *, check: bool = True) -> Array
     if k is not None:
         check_last_axis(u, name, k)
     return check_unit_interval(u, name) if check else u
-
-
-def _safe_sqrt(x: Array) -> Array:
-    """sqrt(max(x, 0)) with a finite gradient at and below zero (double-where)."""
-    pos = x > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
-
-
-def _safe_div(a: Array, b: Array) -> Array:
-    nz = b != 0
-    return jnp.where(nz, a / jnp.where(nz, b, 1.0), 0.0)
 
 
 def _atan2_0_2pi(y: Array, x: Array) -> Array:
@@ -169,7 +160,7 @@ def sample_uniform_disk_concentric(u: FloatLike, *, check: bool = True) -> Float
     r = jnp.where(x_major, ox, oy)
     # theta = pi/4 (y/x) on the x-major wedges, pi/2 - pi/4 (x/y) on the y-major ones.
     theta = jnp.where(
-        x_major, PI_OVER_4 * _safe_div(oy, ox), PI_OVER_2 - PI_OVER_4 * _safe_div(ox, oy)
+        x_major, PI_OVER_4 * safe_div(oy, ox), PI_OVER_2 - PI_OVER_4 * safe_div(ox, oy)
     )
     return jnp.stack([r * jnp.cos(theta), r * jnp.sin(theta)], axis=-1)
 
@@ -237,7 +228,7 @@ def sample_cosine_hemisphere(u: FloatLike, *, check: bool = True) -> Float[Array
         Thesis ch. 5.
     """
     d = sample_uniform_disk_concentric(u, check=check)
-    z = _safe_sqrt(1.0 - d[..., 0] ** 2 - d[..., 1] ** 2)
+    z = safe_sqrt(1.0 - d[..., 0] ** 2 - d[..., 1] ** 2)
     return jnp.concatenate([d, z[..., None]], axis=-1)
 
 
@@ -301,7 +292,7 @@ def sample_uniform_hemisphere(u: FloatLike, *, check: bool = True) -> Float[Arra
     """
     u = _u(u, 2, check=check)
     z = u[..., 0]
-    r = _safe_sqrt(1.0 - z * z)
+    r = safe_sqrt(1.0 - z * z)
     phi = 2 * PI * u[..., 1]
     return jnp.stack([r * jnp.cos(phi), r * jnp.sin(phi), z], axis=-1)
 
@@ -369,7 +360,7 @@ def sample_uniform_sphere(u: FloatLike, *, check: bool = True) -> Float[Array, "
     """
     u = _u(u, 2, check=check)
     z = 1.0 - 2.0 * u[..., 0]
-    r = _safe_sqrt(1.0 - z * z)
+    r = safe_sqrt(1.0 - z * z)
     phi = 2 * PI * u[..., 1]
     return jnp.stack([r * jnp.cos(phi), r * jnp.sin(phi), z], axis=-1)
 
@@ -443,7 +434,7 @@ def sample_uniform_cone(
     u = _u(u, 2, check=check)
     c = as_float_array(cos_theta_max, "cos_theta_max")
     cos_t = (1.0 - u[..., 0]) + u[..., 0] * c
-    sin_t = _safe_sqrt(1.0 - cos_t * cos_t)
+    sin_t = safe_sqrt(1.0 - cos_t * cos_t)
     phi = 2 * PI * u[..., 1]
     return jnp.stack([sin_t * jnp.cos(phi), sin_t * jnp.sin(phi), cos_t], axis=-1)
 
@@ -582,28 +573,24 @@ def invert_uniform_triangle_sample(b: FloatLike) -> Float[Array, "*batch 2"]:
     return _frac_to_unit(jnp.stack([u0, u1], axis=-1))
 
 
-def _dot(a, b):
-    return jnp.sum(a * b, axis=-1)
-
-
 def _normalize(v):
-    n2 = _dot(v, v)
+    n2 = dot(v, v)
     ok = n2 > 0
     return v / jnp.sqrt(jnp.where(ok, n2, 1.0))[..., None]
 
 
 def _angle_between(v1, v2):
     """Numerically robust angle between unit vectors (pbrt's `AngleBetween`)."""
-    d = _dot(v1, v2)
-    s = jnp.sqrt(_dot(v1 + v2, v1 + v2)) / 2
-    t = jnp.sqrt(_dot(v2 - v1, v2 - v1)) / 2
+    d = dot(v1, v2)
+    s = jnp.sqrt(dot(v1 + v2, v1 + v2)) / 2
+    t = jnp.sqrt(dot(v2 - v1, v2 - v1)) / 2
     return jnp.where(
         d < 0, PI - 2 * jnp.arcsin(jnp.clip(s, -1, 1)), 2 * jnp.arcsin(jnp.clip(t, -1, 1))
     )
 
 
 def _gram_schmidt(v, w):
-    return v - _dot(v, w)[..., None] * w
+    return v - dot(v, w)[..., None] * w
 
 
 def _sph_tri_setup(a, b, c):
@@ -684,14 +671,14 @@ def sample_spherical_triangle(
     sin_phi = jnp.sin(ap_pi) * cos_alpha - jnp.cos(ap_pi) * sin_alpha
     cos_phi = jnp.cos(ap_pi) * cos_alpha + jnp.sin(ap_pi) * sin_alpha
     k1 = cos_phi + cos_alpha
-    k2 = sin_phi - sin_alpha * _dot(a, b)
+    k2 = sin_phi - sin_alpha * dot(a, b)
     num = k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha
     den = (k2 * sin_phi + k1 * cos_phi) * sin_alpha
-    cos_bp = jnp.clip(_safe_div(num, den), -1.0, 1.0)
-    sin_bp = _safe_sqrt(1.0 - cos_bp * cos_bp)
+    cos_bp = jnp.clip(safe_div(num, den), -1.0, 1.0)
+    sin_bp = safe_sqrt(1.0 - cos_bp * cos_bp)
     cp = cos_bp[..., None] * a + sin_bp[..., None] * _normalize(_gram_schmidt(c, a))
-    cos_t = 1.0 - u[..., 1] * (1.0 - _dot(cp, b))
-    sin_t = _safe_sqrt(1.0 - cos_t * cos_t)
+    cos_t = 1.0 - u[..., 1] * (1.0 - dot(cp, b))
+    sin_t = safe_sqrt(1.0 - cos_t * cos_t)
     return cos_t[..., None] * b + sin_t[..., None] * _normalize(_gram_schmidt(cp, b))
 
 
@@ -721,11 +708,11 @@ def spherical_triangle_pdf(
     a, b, c, w = _vertices(a, b, c, w)
     area = spherical_triangle_area(a, b, c)
     pdf = jnp.where(area > 0, 1.0 / jnp.where(area > 0, area, 1.0), 0.0)
-    orient = jnp.sign(_dot(jnp.cross(a, b), c))
+    orient = jnp.sign(dot(jnp.cross(a, b), c))
     inside = (
-        (orient * _dot(jnp.cross(a, b), w) >= 0)
-        & (orient * _dot(jnp.cross(b, c), w) >= 0)
-        & (orient * _dot(jnp.cross(c, a), w) >= 0)
+        (orient * dot(jnp.cross(a, b), w) >= 0)
+        & (orient * dot(jnp.cross(b, c), w) >= 0)
+        & (orient * dot(jnp.cross(c, a), w) >= 0)
     )
     return jnp.where(inside, pdf, 0.0)
 
@@ -755,14 +742,14 @@ def invert_spherical_triangle_sample(
     n_ab, alpha, beta, gamma = _sph_tri_setup(a, b, c)
     # c' is where the great circle through b and w meets the arc a-c.
     cp = _normalize(jnp.cross(jnp.cross(b, w), jnp.cross(c, a)))
-    cp = jnp.where((_dot(cp, a + c) < 0)[..., None], -cp, cp)
+    cp = jnp.where((dot(cp, a + c) < 0)[..., None], -cp, cp)
     n_cpb = _normalize(jnp.cross(cp, b))
     n_acp = _normalize(jnp.cross(a, cp))
     ap = alpha + _angle_between(n_ab, n_cpb) + _angle_between(n_acp, -n_cpb) - PI
     area = alpha + beta + gamma - PI
-    near_a = _dot(a, cp) > 0.99999847691  # c' within 0.1 degree of a: the sub-area is 0
-    u0 = jnp.where(near_a, 0.0, _safe_div(ap, area))
-    u1 = _safe_div(1.0 - _dot(w, b), 1.0 - _dot(cp, b))
+    near_a = dot(a, cp) > 0.99999847691  # c' within 0.1 degree of a: the sub-area is 0
+    u0 = jnp.where(near_a, 0.0, safe_div(ap, area))
+    u1 = safe_div(1.0 - dot(w, b), 1.0 - dot(cp, b))
     return _frac_to_unit(jnp.stack([u0, u1], axis=-1))
 
 
@@ -793,8 +780,8 @@ def sample_linear(u: FloatLike, a: FloatLike, b: FloatLike, *, check: bool = Tru
     u = _u(u, check=check)
     a = as_float_array(a, "a")
     b = as_float_array(b, "b")
-    den = a + _safe_sqrt((1.0 - u) * a * a + u * b * b)
-    x = _safe_div(u * (a + b), den)
+    den = a + safe_sqrt((1.0 - u) * a * a + u * b * b)
+    x = safe_div(u * (a + b), den)
     one_minus_eps = 1.0 - jnp.finfo(x.dtype).epsneg
     return jnp.minimum(x, one_minus_eps)
 
@@ -996,15 +983,13 @@ def invert_exponential_sample(x: FloatLike, a: FloatLike) -> Array:
 # Visible wavelengths (pbrt-v4 SampleVisibleWavelengths)
 # --------------------------------------------------------------------------------------------
 
-VISIBLE_MIN_NM = 360.0  # nm, pbrt-v4 `Lambda_min`
-VISIBLE_MAX_NM = 830.0  # nm, pbrt-v4 `Lambda_max`
 _VIS_K = 0.0072  # nm^-1, pbrt-v4: p(lambda) ~ 1 / cosh^2(0.0072 (lambda - 538))
 _VIS_MU = 538.0  # nm
 # Derived rather than retyped: tanh at the range ends, and the normalisation so that the pdf
 # integrates to exactly 1 over [360, 830] nm. pbrt-v4 rounds these to 0.85691062, 1.82750197
 # and 0.0039398042 (relative differences below 1e-7).
-_VIS_T0 = math.tanh(_VIS_K * (_VIS_MU - VISIBLE_MIN_NM))  # 0.85691062...
-_VIS_T1 = math.tanh(_VIS_K * (VISIBLE_MAX_NM - _VIS_MU))
+_VIS_T0 = math.tanh(_VIS_K * (_VIS_MU - VISIBLE_WAVELENGTH_MIN_NM))  # 0.85691062...
+_VIS_T1 = math.tanh(_VIS_K * (VISIBLE_WAVELENGTH_MAX_NM - _VIS_MU))
 _VIS_NORM = _VIS_K / (_VIS_T0 + _VIS_T1)  # 0.0039398042... nm^-1
 
 
@@ -1033,7 +1018,7 @@ def sample_visible_wavelengths(u: FloatLike, *, check: bool = True) -> Array:
     u = _u(u, check=check)
     t = _VIS_T0 - (_VIS_T0 + _VIS_T1) * u
     lam = _VIS_MU - jnp.arctanh(t) / _VIS_K
-    return jnp.clip(lam, VISIBLE_MIN_NM, VISIBLE_MAX_NM)
+    return jnp.clip(lam, VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM)
 
 
 @eqx.filter_jit
@@ -1053,7 +1038,7 @@ def visible_wavelengths_pdf(wavelength_nm: FloatLike) -> Array:
         Thesis ch. 5.
     """
     lam = as_float_array(wavelength_nm, "wavelength_nm")
-    inside = (lam >= VISIBLE_MIN_NM) & (lam <= VISIBLE_MAX_NM)
+    inside = (lam >= VISIBLE_WAVELENGTH_MIN_NM) & (lam <= VISIBLE_WAVELENGTH_MAX_NM)
     return jnp.where(inside, _VIS_NORM / jnp.cosh(_VIS_K * (lam - _VIS_MU)) ** 2, 0.0)
 
 

@@ -125,7 +125,7 @@ def sample_hero_wavelengths(u: Float[Array, "*batch"]) -> tuple[Array, Array]:
     shift = jnp.arange(N_HERO_WAVELENGTHS, dtype=u.dtype) / N_HERO_WAVELENGTHS
     ui = u[..., None] + shift.reshape((1,) * u.ndim + (N_HERO_WAVELENGTHS,))
     ui = jnp.where(ui >= 1.0, ui - 1.0, ui)
-    wavelength_nm = sample_visible_wavelengths(ui)
+    wavelength_nm = sample_visible_wavelengths(ui, check=False)  # u is ours: in [0, 1)
     return wavelength_nm, visible_wavelengths_pdf(wavelength_nm)
 
 

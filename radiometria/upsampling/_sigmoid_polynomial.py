@@ -20,11 +20,11 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ..radiometry import AbstractSpectrum
 
-# Normalised wavelength lambda' = (lambda - LAMBDA_MIN_NM) / (LAMBDA_MAX_NM - LAMBDA_MIN_NM).
-LAMBDA_MIN_NM = 360.0  # nm, lower end of the CIE 1931 tables and of the fit
-LAMBDA_MAX_NM = 830.0  # nm, upper end
+# Normalised wavelength lambda' = (lambda - lambda_min) / (lambda_max - lambda_min) over the
+# visible range of `radiometria.constants` (the CIE 1931 tables' and the fit's).
 
 
 def common_float_dtype(*arrays) -> np.dtype:
@@ -155,7 +155,7 @@ def normalised_to_nm_coefficients(coeffs: ArrayLike) -> Array:
         `Jakob2019` section 4; `Pharr2023` section 4.6.6.
     """
     c = _as_coeffs(coeffs)
-    a, b = LAMBDA_MIN_NM, 1.0 / (LAMBDA_MAX_NM - LAMBDA_MIN_NM)
+    a, b = VISIBLE_WAVELENGTH_MIN_NM, 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
     A, B, C = c[..., 0], c[..., 1], c[..., 2]
     return jnp.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
 
@@ -181,7 +181,7 @@ def nm_to_normalised_coefficients(coeffs: ArrayLike) -> Array:
         `Jakob2019` section 4.
     """
     c = _as_coeffs(coeffs)
-    a, b = LAMBDA_MIN_NM, 1.0 / (LAMBDA_MAX_NM - LAMBDA_MIN_NM)
+    a, b = VISIBLE_WAVELENGTH_MIN_NM, 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
     c0, c1, c2 = c[..., 0], c[..., 1], c[..., 2]
     return jnp.stack([c0 / (b * b), (2.0 * c0 * a + c1) / b, (c0 * a + c1) * a + c2], -1)
 
@@ -225,8 +225,8 @@ class SigmoidPolynomialSpectrum(AbstractSpectrum):
         """
         c = self.coeffs
         c0, c1 = c[..., 0], c[..., 1]
-        lo = jnp.full(c0.shape, LAMBDA_MIN_NM, c.dtype)
-        hi = jnp.full(c0.shape, LAMBDA_MAX_NM, c.dtype)
+        lo = jnp.full(c0.shape, VISIBLE_WAVELENGTH_MIN_NM, c.dtype)
+        hi = jnp.full(c0.shape, VISIBLE_WAVELENGTH_MAX_NM, c.dtype)
         vertex = jnp.clip(-c1 / (2.0 * jnp.where(c0 == 0, 1.0, c0)), lo, hi)
         lam = jnp.stack([lo, hi, vertex], -1)
         x = (c[..., 0:1] * lam + c[..., 1:2]) * lam + c[..., 2:3]

@@ -23,6 +23,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from ..colorimetry import get_colourspace
 from ..radiometry import AbstractSpectrum
 from ._fit import _check_rgb_values
 from ._forward import forward_model
@@ -149,8 +150,6 @@ class RGBIlluminantSpectrum(AbstractSpectrum):
     illuminant_values: Float[Array, " n"]
 
     def __init__(self, lut: RGBToSpectrumLUT, rgb: ArrayLike, colourspace=None):
-        from ..colorimetry import get_colourspace
-
         name = lut.colourspace if colourspace is None else get_colourspace(colourspace).name
         if name != get_colourspace(lut.colourspace).name:
             raise ValueError(

@@ -36,6 +36,7 @@ from typing import ClassVar, NamedTuple
 
 import jax
 import jax.numpy as jnp
+import jaxlib
 import numpy as np
 from jax import lax
 
@@ -92,8 +93,6 @@ def _cpu_signature() -> str:
 
 def _build(cxx: str) -> Path:
     """Compile the kernel (or find it in the cache) and return the shared library's path."""
-    import jaxlib
-
     include = jax.ffi.include_dir()
     version = subprocess.run(
         [cxx, "--version"], capture_output=True, text=True, timeout=60, check=False
