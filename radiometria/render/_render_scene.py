@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from ._accelerators import AbstractAccelerator, build_accelerator
+from ._accelerators import AbstractAccelerator, build_accelerator, check_triangle_arrays
 from ._geometry._mesh import _areas, _corners
 from ._lights import AbstractLight, AreaLight
 from ._materials import AbstractMaterial, Diffuse, MaterialSet
@@ -93,12 +93,7 @@ class RenderScene(eqx.Module):
             such as the Cornell box) or `"auto"` (brute force up to 64 triangles).
         - `dtype`: float dtype of the arrays (float32 for rendering).
         """
-        vertices = np.asarray(vertices, dtype=np.float64)
-        faces = np.asarray(faces)
-        if vertices.ndim != 2 or vertices.shape[1] != 3:
-            raise ValueError(f"`vertices` must have shape (v, 3), got {vertices.shape}.")
-        if faces.ndim != 2 or faces.shape[1] != 3 or faces.dtype.kind not in "iu":
-            raise ValueError(f"`faces` must be integer (f, 3), got {faces.dtype} {faces.shape}.")
+        vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
             raise ValueError("`faces` index vertices out of range.")
         n_faces = faces.shape[0]

@@ -30,6 +30,18 @@ ACCELERATORS: Mapping[str, type[AbstractAccelerator]] = MappingProxyType(
 """The accelerators by name (the `accelerator` option of scenes)."""
 
 
+def check_triangle_arrays(vertices: ArrayLike, faces: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """`(vertices (v, 3) float64, faces (f, 3) int)` as NumPy arrays, or a `ValueError` naming
+    the argument and its shape (static checks, before anything is built)."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise ValueError(f"`vertices` must have shape (v, 3), got {vertices.shape}.")
+    if faces.ndim != 2 or faces.shape[1] != 3 or faces.dtype.kind not in "iu":
+        raise ValueError(f"`faces` must be integer (f, 3), got {faces.dtype} {faces.shape}.")
+    return vertices, faces
+
+
 def build_accelerator(
     vertices: ArrayLike,
     faces: ArrayLike,
@@ -65,12 +77,7 @@ def build_accelerator(
         `Pharr2023` §7.3 (bounding volume hierarchies).
     """
     check_choice(kind, "accelerator", ("auto", *ACCELERATORS))
-    vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces)
-    if vertices.ndim != 2 or vertices.shape[1] != 3:
-        raise ValueError(f"`vertices` must have shape (v, 3), got {vertices.shape}.")
-    if faces.ndim != 2 or faces.shape[1] != 3 or faces.dtype.kind not in "iu":
-        raise ValueError(f"`faces` must be integer (f, 3), got {faces.dtype} {faces.shape}.")
+    vertices, faces = check_triangle_arrays(vertices, faces)
     if kind == "auto":
         kind = "brute_force" if faces.shape[0] <= BRUTE_FORCE_MAX_TRIANGLES else "bvh"
     return ACCELERATORS[kind].from_triangles(vertices, faces, dtype=dtype)

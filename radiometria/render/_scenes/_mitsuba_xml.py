@@ -338,15 +338,21 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
     return len(materials) - 1
 
 
-def _emitter(ctx: _Ctx, node: _Node) -> dict:
+def _plugin(ctx: _Ctx, node: _Node, registry: dict, what: str) -> tuple[str, dict]:
+    """The plugin a tag names (a key of one of the renderer's registries) and its parameters,
+    checked against the names the plugin declares."""
     kind = ctx.attr(node, "type")
-    if kind not in LIGHTS:
+    if kind not in registry:
         raise ctx.err(
-            node, f"unsupported emitter type '{kind}' (line {node.line}); only "
-            f"{sorted(LIGHTS)} emitters inside a <shape> are supported"
+            node, f"unsupported {what} type '{kind}' (line {node.line}); supported: "
+            f"{sorted(registry)}"
         )  # fmt: skip
     _only_children(ctx, node, set())
-    props = _properties(ctx, node, set(LIGHTS[kind].PARAMETERS))
+    return kind, _properties(ctx, node, set(registry[kind].PARAMETERS))
+
+
+def _emitter(ctx: _Ctx, node: _Node) -> dict:
+    _, props = _plugin(ctx, node, LIGHTS, "emitter (inside a <shape>)")
     if "radiance" not in props:
         raise ctx.err(node, "an area emitter needs a 'radiance'")
     return {"radiance": props["radiance"], "two_sided": False}
@@ -565,14 +571,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         elif ch.tag == "sensor":
             camera, film, spp = _sensor(ctx, ch)
         elif ch.tag == "integrator":
-            integrator = ctx.attr(ch, "type")
-            if integrator not in INTEGRATORS:
-                raise ctx.err(
-                    ch, f"unsupported integrator type '{integrator}' (line {ch.line}); "
-                    f"supported: {sorted(INTEGRATORS)}"
-                )  # fmt: skip
-            _only_children(ctx, ch, set())
-            p = _properties(ctx, ch, set(INTEGRATORS[integrator].PARAMETERS))
+            integrator, p = _plugin(ctx, ch, INTEGRATORS, "integrator")
             try:
                 INTEGRATORS[integrator].from_properties(p, where=f"{file}:{ch.line}")
             except ValueError as e:
