@@ -60,15 +60,14 @@ def _time_at_error(times, errors, target):
 
 
 def _ours(size, sampler):
-    from radiometria.render import load_scene, render
-    from radiometria.render._render_scene import compile_scene
+    from radiometria.render import Path, compile_scene, load_scene, render
 
     scene, camera, rfilter = compile_scene(load_scene("cornell-box"), width=size, height=size)
 
     def run(spp, seed):
         img = render(
-            scene, camera=camera, rfilter=rfilter, spp=spp, seed=seed, max_depth=8,
-            sampler=sampler, progress=False,
+            scene, camera=camera, rfilter=rfilter, spp=spp, seed=seed,
+            integrator=Path(max_depth=8), sampler=sampler, progress=False,
         )  # fmt: skip
         return np.asarray(img, np.float64)
 
@@ -103,6 +102,8 @@ def main(argv=None) -> int:
 
     import jax
 
+    from radiometria.render import Independent, OwenSobol
+
     print(f"devices: {jax.devices()}; cores: {os.cpu_count()}")
     ref_path = args.cache / f"mitsuba_ref_{args.size}_{args.ref_spp}.npy"
     if ref_path.exists():
@@ -114,8 +115,8 @@ def main(argv=None) -> int:
         print(f"  {t:.1f} s")
 
     renderers = {
-        "radiometria (independent)": _ours(args.size, "independent"),
-        "radiometria (sobol)": _ours(args.size, "sobol"),
+        "radiometria (independent)": _ours(args.size, Independent()),
+        "radiometria (sobol)": _ours(args.size, OwenSobol()),
         "mitsuba scalar_spectral": _mitsuba(args.size, "scalar_spectral"),
     }
     llvm = os.environ.get("DRJIT_LIBLLVM_PATH") or next(
@@ -157,13 +158,13 @@ def main(argv=None) -> int:
     # The same scene from a Mitsuba XML file, through both renderers.
     import mitsuba as mi
 
-    from radiometria.render import render
+    from radiometria.render import OwenSobol, render
 
     xml = args.cache / "cornell_box.xml"
     xml.write_text(cornell_box_xml(args.size, args.size))
     mi.set_variant("scalar_spectral")
     theirs = render_mitsuba(mi.load_file(str(xml)), 64, seed=7)
-    ours = np.asarray(render(xml, spp=64, sampler="sobol", progress=False), np.float64)
+    ours = np.asarray(render(xml, spp=64, sampler=OwenSobol(), progress=False), np.float64)
     print(f"XML scene, 64 spp: Mitsuba mean {theirs.mean(axis=(0, 1))}, radiometria mean "
           f"{ours.mean(axis=(0, 1))}")  # fmt: skip
 

@@ -3,8 +3,9 @@
 #
 # The built-in `cornell-box` scene (Mitsuba 3's `cornell_box()`: RGB reflectances upsampled to
 # spectra, an RGB light as an illuminant spectrum) rendered with `radiometria.render.render`.
-# Two integrators, direct illumination (`max_depth=2`) and path tracing (NEE + MIS + Russian
-# roulette), each with independent samples and with padded Owen-scrambled Sobol points. The
+# Two integrators, direct illumination (`Direct()`: two path segments) and path tracing
+# (`Path()`: NEE + MIS + Russian roulette, the scene's depths), each with independent samples
+# (`Independent()`) and with padded Owen-scrambled Sobol points (`OwenSobol()`). The
 # difference between the two integrators is the indirect light (colour bleeding); the
 # difference between the two samplers is the noise at equal sample count, measured against a
 # reference render with 4x the samples.
@@ -50,17 +51,19 @@ print(f"filter: {type(rfilter).__name__}, radius {float(rfilter.radius)} px")
 # compiled program, so the reference reuses the path/Sobol program.
 
 # %%
+INTEGRATORS = {"direct": rm.render.Direct(), "path": rm.render.scene_integrator(description)}
+SAMPLERS = {"independent": rm.render.Independent(), "sobol": rm.render.OwenSobol()}
 images = {}
-for integrator in ("direct", "path"):
-    for sampler in ("independent", "sobol"):
+for integrator in INTEGRATORS:
+    for sampler in SAMPLERS:
         start = time.perf_counter()
         rgb = rm.render.render(
             description,
             spp=SPP,
             width=SIZE,
             height=SIZE,
-            integrator=integrator,
-            sampler=sampler,
+            integrator=INTEGRATORS[integrator],
+            sampler=SAMPLERS[sampler],
             seed=0,
             progress=False,
         )
@@ -73,7 +76,13 @@ for integrator in ("direct", "path"):
 
 reference = np.asarray(
     rm.render.render(
-        description, spp=4 * SPP, width=SIZE, height=SIZE, sampler="sobol", seed=99, progress=False
+        description,
+        spp=4 * SPP,
+        width=SIZE,
+        height=SIZE,
+        sampler=SAMPLERS["sobol"],
+        seed=99,
+        progress=False,
     )
 )
 

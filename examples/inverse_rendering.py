@@ -77,7 +77,8 @@ BLOCK = 8  # the loss compares BLOCK x BLOCK pixel means
 description = rm.render.load_scene("cornell-box")
 base_scene, camera, _ = rm.render.compile_scene(description, width=SIZE, height=SIZE)
 RED = [m.name for m in description.materials].index("red")
-MAX_DEPTH, RR_DEPTH = description.max_depth, description.rr_depth  # 8 segments, roulette from 5
+INTEGRATOR = rm.render.scene_integrator(description)  # the scene file's `Path` integrator
+MAX_DEPTH, RR_DEPTH = INTEGRATOR.max_depth, INTEGRATOR.rr_depth  # 8 segments, roulette from 5
 GRID = jnp.asarray(rm.render.wavelength_grid_nm(), jnp.float32)  # the renderer's 1 nm grid
 LUT = rm.upsampling.get_lut("sRGB")
 CMFS = rm.camera.Film(1, 1, dtype=jnp.float32)  # only its colour-matching functions are used
@@ -126,11 +127,18 @@ def render(scene, samples, *, compact=True):
 #   colour cast on the white walls. The fit runs on $\log(T / 1000\,\mathrm{K})$.
 
 # %%
-RGB_TRUE = np.asarray(description.materials[RED].params["reflectance"]["rgb"], np.float32)
+RGB_TRUE = np.asarray(description.materials[RED].params["reflectance"].rgb, np.float32)
 T_TRUE, T_START = 3200.0, 6500.0  # [K]
 cmfs = rm.colorimetry.get_cmfs()
 YBAR = jnp.asarray(np.interp(GRID, cmfs.wavelengths_nm, cmfs.values[:, 1]), jnp.float32)
-LIGHT_Y = float(jnp.sum(base_scene.radiance.values[0] * YBAR) / jnp.sum(YBAR))
+LIGHT_Y = float(jnp.sum(base_scene.light.radiance.table.values[0] * YBAR) / jnp.sum(YBAR))
+
+
+def reflectance_table(scene):
+    """The scene's reflectance rows: its materials are all Lambertian, one `Diffuse` plugin
+    whose rows are in material order."""
+    (diffuse,) = scene.materials.plugins
+    return diffuse.reflectance.table
 
 
 def scene_at(params):
@@ -140,10 +148,10 @@ def scene_at(params):
     planck = rm.radiometry.planck(GRID, 1000.0 * jnp.exp(params["log_temperature"]))
     radiance = planck * (LIGHT_Y * jnp.sum(YBAR) / jnp.sum(planck * YBAR))  # [W m^-2 sr^-1 nm^-1]
     return eqx.tree_at(
-        lambda s: (s.materials.reflectance.values, s.radiance.values),
+        lambda s: (reflectance_table(s).values, s.light.radiance.table.values),
         base_scene,
         (
-            base_scene.materials.reflectance.values.at[RED].set(reflectance),
+            reflectance_table(base_scene).values.at[RED].set(reflectance),
             radiance[None, :],
         ),
     )
@@ -161,7 +169,7 @@ truth = parameters(RGB_TRUE, T_TRUE)
 start = parameters([0.4, 0.5, 0.6], T_START)
 # The upsampling is `compile_scene`'s: the scene's own red-wall spectrum comes back.
 row_error = jnp.max(
-    jnp.abs(scene_at(truth).materials.reflectance.values - base_scene.materials.reflectance.values)
+    jnp.abs(reflectance_table(scene_at(truth)).values - reflectance_table(base_scene).values)
 )
 print(
     f"red-wall spectrum, differentiable upsampling vs compile_scene: max |diff| = {row_error:.1e}"

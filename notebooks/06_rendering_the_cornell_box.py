@@ -62,37 +62,47 @@ print("camera:", description.camera.origin, "looking along", description.camera.
 print(f"film: {description.film}, max_depth {description.max_depth}")
 
 # %% [markdown]
-# The scene is authored in RGB; the renderer needs spectra. `spectrum_values` tabulates each
-# parameter on the renderer's 1 nm grid: reflectances as bounded sigmoid-polynomial spectra
-# (Jakob & Hanika 2019, thesis 2.2.3), the light's RGB radiance as an illuminant spectrum
-# (a smooth spectrum times D65), exactly as `compile_scene` does.
+# The scene is authored in RGB (`LinearRGB` values); the renderer needs spectra.
+# `tabulate_spectrum` tabulates each parameter on the renderer's 1 nm grid, the RGB spectrum
+# class choosing what a triple means: reflectances as bounded sigmoid-polynomial spectra
+# (`RGBAlbedoSpectrum`, Jakob & Hanika 2019, thesis 2.2.3), the light's RGB radiance as an
+# illuminant spectrum (`RGBIlluminantSpectrum`: a smooth spectrum times D65), exactly as
+# `compile_scene` does.
 
 # %%
 grid = rm.render.wavelength_grid_nm()
 fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 3.5), layout="constrained")
 colours = {"white": "0.6", "green": "tab:green", "red": "tab:red"}
 for m in description.materials:
-    reflectance = rm.render.spectrum_values(m.params["reflectance"], "albedo")
+    reflectance = rm.render.tabulate_spectrum(
+        m.params["reflectance"], rm.upsampling.RGBAlbedoSpectrum
+    )
     ax1.plot(grid, reflectance, color=colours.get(m.name, "k"), label=m.name)
 ax1.set(xlabel="wavelength [nm]", ylabel="reflectance", title="materials")
 ax1.legend()
-ax2.plot(grid, rm.render.spectrum_values(light.radiance, "illuminant"), color="orange")
+radiance = rm.render.tabulate_spectrum(light.radiance, rm.upsampling.RGBIlluminantSpectrum)
+ax2.plot(grid, radiance, color="orange")
 ax2.set(xlabel="wavelength [nm]", ylabel="radiance [relative]", title="light")
 
 # %% [markdown]
 # ## Compiling it
 #
-# `compile_scene` returns the `RenderScene` (triangles as structure-of-arrays, spectra as
-# `SpectrumTable` rows, the discrete distribution for sampling the light), a `PinholeCamera`
-# and the film's reconstruction filter. With 36 triangles, brute-force intersection is faster
-# than a BVH, so the geometry stays a plain `TriangleMesh`.
+# `compile_scene` returns the `RenderScene` (triangles as structure-of-arrays, the material
+# plugins with their spectra as `SpectrumTable` rows, the area light with its discrete
+# distribution for sampling, an accelerator), a `PinholeCamera` and the film's reconstruction
+# filter. With 36 triangles, brute-force intersection is faster than a BVH, so the accelerator
+# is a `BruteForceAccelerator` around a plain `TriangleMesh`.
 
 # %%
 scene, camera, rfilter = rm.render.compile_scene(description, width=SIZE, height=SIZE)
-print("geometry:", type(scene.geometry).__name__)
+print("accelerator:", type(scene.accelerator).__name__)
 print("triangle corners p0:", scene.p0.shape, scene.p0.dtype)
-print("reflectance table:", scene.materials.reflectance.values.shape)
-print("emissive triangles:", scene.light_face, "selection cdf:", scene.light_cdf)
+(diffuse,) = scene.materials.plugins  # the three Lambertian materials, one plugin
+print(
+    f"materials: {type(diffuse).__name__}, reflectance table",
+    diffuse.reflectance.table.values.shape,
+)
+print("emissive triangles:", scene.light.light_face, "selection cdf:", scene.light.light_cdf)
 print(f"camera {camera.width} x {camera.height} px, fov_x {float(camera.fov_x_deg):.2f} deg")
 print(f"filter {type(rfilter).__name__}, radius {float(rfilter.radius)} px")
 light_vertices = description.vertices[np.unique(description.faces[light.triangles])]
@@ -103,13 +113,14 @@ print("the light's corners in raster space [px]:\n", np.asarray(camera.project(l
 #
 # `render` takes the scene name, a description or a compiled scene with its camera. It traces
 # the paths in batches, so memory does not grow with the sample count, and compiles one step
-# per configuration (the first call takes seconds). `max_depth` counts path segments as
-# Mitsuba does: 2 is direct illumination, the scene's 8 includes the indirect light.
+# per configuration (the first call takes seconds). The integrator is an object: by default
+# the scene file's (`Path(max_depth=8, rr_depth=5)` here); `max_depth` counts path segments as
+# Mitsuba does, and `Direct()` is direct illumination (two segments).
 
 # %%
 rgb = rm.render.render(description, spp=SPP, width=SIZE, height=SIZE, progress=False)
 direct = rm.render.render(
-    description, spp=SPP, width=SIZE, height=SIZE, integrator="direct", progress=False
+    description, spp=SPP, width=SIZE, height=SIZE, integrator=rm.render.Direct(), progress=False
 )
 print("mean linear sRGB, path  :", np.asarray(rgb.mean(axis=(0, 1))))
 print("mean linear sRGB, direct:", np.asarray(direct.mean(axis=(0, 1))))
@@ -131,7 +142,7 @@ small, max_spp = (8, 8) if SMOKE else (32, 64)
 counts = [2**i for i in range(int(np.log2(max_spp)) + 1)]
 kw = {"width": small, "height": small, "progress": False, "batch": small * small}
 reference = np.asarray(
-    rm.render.render(description, spp=16 * max_spp, sampler="sobol", seed=99, **kw)
+    rm.render.render(description, spp=16 * max_spp, sampler=rm.render.OwenSobol(), seed=99, **kw)
 )
 
 
@@ -140,9 +151,10 @@ def relative_mse(img):
 
 
 fig, ax = plt.subplots(figsize=(5.5, 4))
-for sampler in ("independent", "sobol"):
+samplers = {"independent": rm.render.Independent(), "sobol": rm.render.OwenSobol()}
+for sampler, plugin in samplers.items():
     errors = [
-        relative_mse(rm.render.render(description, spp=n, sampler=sampler, seed=1, **kw))
+        relative_mse(rm.render.render(description, spp=n, sampler=plugin, seed=1, **kw))
         for n in counts
     ]
     slope = np.polyfit(np.log(counts), np.log(errors), 1)[0]

@@ -15,9 +15,11 @@
 # needs nothing else:
 #
 # - `radiometria.render.compile_scene` gives a `RenderScene`: triangles as arrays (`p0`, `e1`,
-#   `e2`, `normal`), a material and an emitter index per triangle, spectra as `SpectrumTable`
-#   rows, the light-sampling distribution (`light_face`, `light_cdf`, `light_pdf_area`), and
-#   the ray queries `intersect_closest` / `intersect_any`;
+#   `e2`, `normal`) and a material index per triangle; its `materials` (a `MaterialSet` of
+#   material plugins, whose spectra are `SpectrumTable` rows); its `light` (an `AreaLight`:
+#   the emitter index per triangle, the emitted radiance and the light-sampling distribution
+#   `light_face`, `light_cdf`, `light_pdf_area`); and its `accelerator` with the ray queries
+#   `intersect_closest` / `intersect_any`;
 # - `PinholeCamera.generate_ray` turns raster positions into rays (section 2.3.1);
 # - `radiometria.montecarlo` has the warps (cosine hemisphere, triangle, discrete);
 # - `radiometria.render.sample_hero_wavelengths` and `radiometria.camera.film_samples_to_XYZ`
@@ -25,7 +27,7 @@
 #
 # An integrator written with them is a pure function of arrays, so `jax.jit`, `jax.vmap` and
 # `jax.grad` apply to it. Below: ambient occlusion, then spectral direct lighting, checked
-# against the library's `direct` integrator, and its derivatives with respect to the light's
+# against the library's `Direct` integrator, and its derivatives with respect to the light's
 # colour temperature and a wall's albedo. The renderer is float32, and so is everything here.
 
 # %%
@@ -51,15 +53,15 @@ pixels = jnp.stack([ix, iy], axis=-1).reshape(-1, 2).astype(jnp.float32)
 # %% [markdown]
 # ## The first hit
 #
-# `intersect_closest` returns a `Hit` (ray parameter, triangle index, barycentrics); the
-# point and the geometric normal come from the scene's triangle arrays. The Cornell box's
-# materials scatter on the front side only (the side the normal points to).
+# The accelerator's `intersect_closest` returns a `Hit` (ray parameter, triangle index,
+# barycentrics); the point and the geometric normal come from the scene's triangle arrays.
+# The Cornell box's materials scatter on the front side only (the side the normal points to).
 
 
 # %%
 def first_hit(origins, directions):
     """Closest hit of `(n, 3)` rays: (hit anything, front side, triangle, point, normal)."""
-    hit = scene.intersect_closest(origins, directions, jnp.inf)
+    hit = scene.accelerator.intersect_closest(origins, directions, jnp.inf)
     face = jnp.where(hit.valid, hit.prim, 0)
     b1, b2 = hit.b1[:, None], hit.b2[:, None]
     point = scene.p0[face] + b1 * scene.e1[face] + b2 * scene.e2[face]
@@ -86,7 +88,7 @@ def ambient_occlusion(pixel, u, radius=0.5):
     s, t = rm.scattering.coordinate_system(normal)
     local = rm.montecarlo.sample_cosine_hemisphere(u[:, 2:4])
     wi = rm.scattering.to_world((s, t, normal), local)
-    occluded = scene.intersect_any(point + 1e-4 * normal, wi, radius)
+    occluded = scene.accelerator.intersect_any(point + 1e-4 * normal, wi, radius)
     return jnp.mean(jnp.where(valid & ~occluded, 1.0, 0.0))
 
 
@@ -109,7 +111,7 @@ plt.axis("off")
 # ## Spectral direct lighting
 #
 # A one-bounce estimator: the emission seen directly, plus next-event estimation at the first
-# hit. A light triangle is chosen with the scene's light distribution and a point $q$ is drawn
+# hit. A light triangle is chosen with the light's distribution and a point $q$ is drawn
 # uniformly on it; `light_pdf_area` is the density of $q$ per unit area (selection
 # probability over area), so with the Lambertian BRDF $\rho(\lambda)/\pi$
 #
@@ -124,13 +126,18 @@ plt.axis("off")
 # %%
 film = rm.camera.Film(1, 1)  # only its colour-matching functions are used
 RED = [m.name for m in description.materials].index("red")
-LIGHT_SPECTRUM = rm.render.spectrum_values(description.emitters[0].radiance, "illuminant")
+LIGHT_SPECTRUM = rm.render.tabulate_spectrum(
+    description.emitters[0].radiance, rm.upsampling.RGBIlluminantSpectrum
+)
 LIGHT_AT_560 = float(np.interp(560.0, rm.render.wavelength_grid_nm(), LIGHT_SPECTRUM))
+# The Cornell box's materials are all Lambertian: one `Diffuse` plugin, whose reflectance
+# texture has one row per material (`row_of` maps a material index to its row).
+(DIFFUSE,) = scene.materials.plugins
 
 
 def light_radiance(params, emitter, wavelength_nm):
     if params is None:
-        return scene.radiance(emitter, wavelength_nm)
+        return scene.light.radiance(emitter, wavelength_nm)
     temperature = params["temperature"]
     planck = rm.radiometry.planck(wavelength_nm, temperature)
     return LIGHT_AT_560 * planck / rm.radiometry.planck(560.0, temperature)
@@ -143,27 +150,27 @@ def direct_lighting(params, pixel, u):
     valid, front, face, point, normal = first_hit(origins, directions)
     seen = valid & front
     # emission seen directly
-    emitter = scene.face_emitter[face]
+    emitter = scene.light.face_emitter[face]
     le = light_radiance(params, jnp.maximum(emitter, 0), wavelength_nm)
     emitted = jnp.where((seen & (emitter >= 0))[:, None], le, 0.0)
     # next-event estimation: a light triangle, then a uniform point on it
-    weights = jnp.diff(scene.light_cdf, prepend=0.0)
+    weights = jnp.diff(scene.light.light_cdf, prepend=0.0)
     choice, _, _ = rm.montecarlo.sample_discrete(u[:, 3], weights)
-    light = scene.light_face[choice]
+    light = scene.light.light_face[choice]
     b = rm.montecarlo.sample_uniform_triangle(u[:, 4:6])
     q = scene.p0[light] + b[:, 1:2] * scene.e1[light] + b[:, 2:3] * scene.e2[light]
     dist = jnp.linalg.norm(q - point, axis=-1)
     wi = (q - point) / dist[:, None]
     cos_p = jnp.sum(normal * wi, axis=-1)
     cos_q = -jnp.sum(scene.normal[light] * wi, axis=-1)
-    visible = ~scene.intersect_any(point + 1e-4 * normal, wi, dist * (1.0 - 1e-3))
+    visible = ~scene.accelerator.intersect_any(point + 1e-4 * normal, wi, dist * (1.0 - 1e-3))
     material = scene.face_material[face]
-    rho = scene.materials.reflectance(material, wavelength_nm)
+    rho = DIFFUSE.reflectance(scene.materials.row_of[material], wavelength_nm)
     if params is not None:
         rho = rho * jnp.where(material == RED, params["red_albedo"], 1.0)[:, None]
-    le_q = light_radiance(params, scene.face_emitter[light], wavelength_nm)
+    le_q = light_radiance(params, scene.light.face_emitter[light], wavelength_nm)
     ok = seen & visible & (cos_p > 0) & (cos_q > 0)
-    g = jnp.where(ok, cos_p * cos_q / (dist**2 * scene.light_pdf_area[light]), 0.0)
+    g = jnp.where(ok, cos_p * cos_q / (dist**2 * scene.light.light_pdf_area[light]), 0.0)
     reflected = rho / jnp.pi * le_q * g[:, None]
     xyz = [rm.camera.film_samples_to_XYZ(film, x, wavelength_nm, pdf) for x in (emitted, reflected)]
     return jnp.stack([jnp.mean(x, axis=0) for x in xyz])
@@ -172,18 +179,18 @@ def direct_lighting(params, pixel, u):
 direct_image = jax.jit(jax.vmap(direct_lighting, in_axes=(None, 0, 0)))
 
 # %% [markdown]
-# A check against the library: `render(..., integrator="direct")` minus the emission alone
-# (`max_depth=1`, same seed, so the same camera samples) is the reflected direct light, which
-# the library estimates with light and BSDF samples combined by MIS. A box filter of radius
-# 1/2 px makes its pixels plain averages, like ours. The emitted part is left out of the
+# A check against the library: `render(..., integrator=Direct())` minus the emission alone
+# (`Path(max_depth=1)`, same seed, so the same camera samples) is the reflected direct light,
+# which the library estimates with light and BSDF samples combined by MIS. A box filter of
+# radius 1/2 px makes its pixels plain averages, like ours. The emitted part is left out of the
 # comparison: on the few pixels that see the light it is much noisier than the rest.
 
 # %%
 u = jax.random.uniform(jax.random.key(1), (SIZE * SIZE, SPP, 6))
 ours = direct_image(None, pixels, u)
 kw = {"camera": camera, "rfilter": rm.camera.BoxFilter(0.5), "spp": SPP, "progress": False}
-library = rm.render.render(scene, integrator="direct", return_xyz=True, **kw)
-emission = rm.render.render(scene, max_depth=1, return_xyz=True, **kw)
+library = rm.render.render(scene, integrator=rm.render.Direct(), return_xyz=True, **kw)
+emission = rm.render.render(scene, integrator=rm.render.Path(max_depth=1), return_xyz=True, **kw)
 ours_y = float(jnp.mean(ours[:, 1, 1]))
 library_y = float(jnp.mean(library[..., 1] - emission[..., 1]))
 print(f"mean Y of the reflected direct light: ours {ours_y:.4f}, library {library_y:.4f}")

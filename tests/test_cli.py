@@ -47,6 +47,30 @@ def test_render_writes_exr_and_png(tmp_path, capsys):
     assert "render" in capsys.readouterr().err  # the progress bar
 
 
+@pytest.mark.slow
+def test_render_sampler_and_integrator_flags(tmp_path):
+    """`--sampler sobol --integrator direct` renders with those plugins (recorded in the EXR)."""
+    exr = tmp_path / "direct.exr"
+    argv = ["render", "cornell-box", "--width", "8", "--height", "8", "--spp", "1"]
+    argv += ["--sampler", "sobol", "--integrator", "direct", "--out", str(exr)]
+    assert main(argv) == 0
+    rgb, meta = read_exr(exr)
+    assert rgb.shape == (8, 8, 3) and np.all(np.isfinite(rgb)) and rgb.mean() > 0
+    assert meta["sampler"] == "sobol" and meta["integrator"] == "direct"
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [(["--sampler", "halton"], "--sampler"), (["--integrator", "bdpt"], "--integrator")],
+)
+def test_render_rejects_unknown_plugin_names(tmp_path, capsys, extra, message):
+    out = tmp_path / "x.exr"
+    assert main(["render", "cornell-box", "--spp", "1", "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert "error" in err and message in err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize(
     ("extra", "message"),
     [

@@ -3,7 +3,7 @@
 import numpy as np
 
 from ..colorimetry import srgb_eotf_inverse
-from ..render import render
+from ..render import Independent, OwenSobol, render
 from ._registry import figure, save
 
 
@@ -60,14 +60,17 @@ def fig_9_render_convergence(out_dir, *, smoke: bool = False):
     counts = [2**i for i in range(int(np.log2(max_spp)) + 1)]
     n_pix = size * size
     kw = {"width": size, "height": size, "progress": False, "batch": n_pix}
-    reference = np.asarray(render("cornell-box", spp=16 * max_spp, sampler="sobol", seed=99, **kw))
+    reference = np.asarray(
+        render("cornell-box", spp=16 * max_spp, sampler=OwenSobol(), seed=99, **kw)
+    )
 
     def rel_mse(img):
         return float(np.mean((img - reference) ** 2 / (reference**2 + 1e-2)))
 
     seeds = (0,) if smoke else (0, 1)
     fig, ax = plt.subplots(figsize=(6.0, 4.5), layout="constrained")
-    for sampler, color in (("independent", "tab:blue"), ("sobol", "tab:orange")):
+    samplers = (("independent", Independent(), "tab:blue"), ("sobol", OwenSobol(), "tab:orange"))
+    for name, sampler, color in samplers:
         err = [
             np.mean(
                 [rel_mse(np.asarray(render("cornell-box", spp=n, sampler=sampler, seed=s, **kw)))
@@ -75,7 +78,7 @@ def fig_9_render_convergence(out_dir, *, smoke: bool = False):
             )
             for n in counts
         ]  # fmt: skip
-        ax.loglog(counts, err, "o-", color=color, label=sampler)
+        ax.loglog(counts, err, "o-", color=color, label=name)
     ax.loglog(counts, err[0] * counts[0] / np.asarray(counts, float), "k--", lw=0.8,
               label="slope -1")  # fmt: skip
     ax.set_xlabel("samples per pixel")

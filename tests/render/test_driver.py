@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from radiometria.camera import PinholeCamera
-from radiometria.render import render
+from radiometria.render import Path as PathIntegrator, render
 
 from ._synthetic import lit_box_camera, lit_box_scene
 
@@ -26,7 +26,7 @@ def box():
 
 def _render(box, **kw):
     scene, cam = box
-    kw = {"spp": SPP, "max_depth": DEPTH, "progress": False, **kw}
+    kw = {"spp": SPP, "integrator": PathIntegrator(max_depth=DEPTH), "progress": False, **kw}
     return np.asarray(render(scene, camera=cam, **kw))
 
 
@@ -51,7 +51,7 @@ def test_render_image_does_not_depend_on_batch(box):
 
 @pytest.mark.slow
 def test_render_max_depth_one_sees_only_emitters(box):
-    img = _render(box, max_depth=1)
+    img = _render(box, integrator=PathIntegrator(max_depth=1))
     lit = img.sum(axis=-1) > 0
     assert 0 < lit.sum() < lit.size  # the ceiling light is in view, the walls are black
 
@@ -62,11 +62,11 @@ def test_render_sharded_over_four_devices_matches_one():
     script = textwrap.dedent(
         """
         import jax, numpy as np
-        from radiometria.render import render
+        from radiometria.render import Path, render
         from tests.render._synthetic import lit_box_camera, lit_box_scene
         assert len(jax.devices()) == 4, jax.devices()
         scene, cam = lit_box_scene(), lit_box_camera()
-        kw = dict(camera=cam, spp=4, max_depth=3, seed=5, progress=False)
+        kw = dict(camera=cam, spp=4, integrator=Path(max_depth=3), seed=5, progress=False)
         one = np.asarray(render(scene, devices=jax.devices()[:1], **kw))
         four = np.asarray(render(scene, devices=jax.devices(), **kw))
         print("maxdiff", float(np.abs(one - four).max()), float(one.mean()))
@@ -95,12 +95,16 @@ def test_render_rejects_bad_arguments(box):
         render(scene, camera=cam, spp=0, progress=False)
     with pytest.raises(TypeError, match="spp"):
         render(scene, camera=cam, spp=2.5, progress=False)
-    with pytest.raises(ValueError, match="integrator"):
+    with pytest.raises(TypeError, match="integrator"):
         render(scene, camera=cam, spp=1, integrator="bdpt", progress=False)
-    with pytest.raises(ValueError, match="sampler"):
+    with pytest.raises(TypeError, match="integrator"):
+        render(scene, camera=cam, spp=1, integrator="path", progress=False)
+    with pytest.raises(TypeError, match="sampler"):
         render(scene, camera=cam, spp=1, sampler="halton", progress=False)
+    with pytest.raises(TypeError, match="sampler"):
+        render(scene, camera=cam, spp=1, sampler="sobol", progress=False)
     with pytest.raises(ValueError, match="max_depth"):
-        render(scene, camera=cam, spp=1, max_depth=0, progress=False)
+        render(scene, camera=cam, spp=1, integrator=PathIntegrator(max_depth=0), progress=False)
     with pytest.raises(ValueError, match="camera"):
         render(scene, spp=1, progress=False)
     with pytest.raises(ValueError, match="width"):
@@ -123,20 +127,29 @@ def test_render_refuses_absurd_resolution_before_allocating(box):
 @pytest.mark.slow
 def test_render_measured_cornell_box_fully_spectral():
     """`cornell-box-measured`: measured reflectance and light spectra, no RGB upsampling."""
-    from radiometria.render import compile_scene, load_scene, wavelength_grid_nm
+    from radiometria.radiometry import PiecewiseLinearSpectrum
+    from radiometria.render import Diffuse, compile_scene, load_scene, wavelength_grid_nm
 
     description = load_scene("cornell-box-measured")
     scene, _, _ = compile_scene(description, width=16, height=16)
     grid = wavelength_grid_nm()
+    (diffuse,) = scene.materials.plugins  # the three materials are one Diffuse plugin
+    assert isinstance(diffuse, Diffuse)
+    reflectance = np.asarray(diffuse.reflectance.table.values)
     for row, material in enumerate(description.materials):
-        wl, values = material.params["reflectance"]["spectrum"]
+        measured = material.params["reflectance"]
+        assert isinstance(measured, PiecewiseLinearSpectrum)
+        wl, values = np.asarray(measured.wavelengths_nm), np.asarray(measured.values)
         expected = np.interp(grid, wl, values, left=0.0, right=0.0)
-        np.testing.assert_allclose(
-            np.asarray(scene.materials.reflectance.values[row]), expected, atol=1e-6
-        )
-    wl, values = description.emitters[0].radiance["spectrum"]
+        plugin_row = int(scene.materials.row_of[row])
+        np.testing.assert_allclose(reflectance[plugin_row], expected, atol=1e-6)
+    radiance = description.emitters[0].radiance
+    assert isinstance(radiance, PiecewiseLinearSpectrum)
+    wl, values = np.asarray(radiance.wavelengths_nm), np.asarray(radiance.values)
     np.testing.assert_allclose(
-        np.asarray(scene.radiance.values[0]), np.interp(grid, wl, values, 0, 0), rtol=1e-6
+        np.asarray(scene.light.radiance.table.values[0]),
+        np.interp(grid, wl, values, 0, 0),
+        rtol=1e-6,
     )
     img = np.asarray(render(description, spp=4, width=16, height=16, progress=False))
     assert img.shape == (16, 16, 3) and np.all(np.isfinite(img)) and img.mean() > 0
@@ -157,10 +170,10 @@ def test_render_multi_process_matches_one_process(tmp_path):
         jax.config.update("jax_cpu_collectives_implementation", "gloo")
         pid = int(sys.argv[1])
         jax.distributed.initialize("127.0.0.1:{port}", num_processes=2, process_id=pid)
-        from radiometria.render import render
+        from radiometria.render import Path, render
         from tests.render._synthetic import lit_box_camera, lit_box_scene
-        img = render(lit_box_scene(), camera=lit_box_camera(), spp=4, max_depth=3, seed=5,
-                     batch=64, progress=False)
+        img = render(lit_box_scene(), camera=lit_box_camera(), spp=4,
+                     integrator=Path(max_depth=3), seed=5, batch=64, progress=False)
         np.save(r"{tmp_path}/part" + str(pid) + ".npy", np.asarray(img))
         """
     )
@@ -181,7 +194,15 @@ def test_render_multi_process_matches_one_process(tmp_path):
     assert all(p.returncode == 0 for p in procs), "\n".join(outputs)
     scene, cam = lit_box_scene(), lit_box_camera()
     one = np.asarray(
-        render(scene, camera=cam, spp=4, max_depth=3, seed=5, batch=64, progress=False)
+        render(
+            scene,
+            camera=cam,
+            spp=4,
+            integrator=PathIntegrator(max_depth=3),
+            seed=5,
+            batch=64,
+            progress=False,
+        )
     )
     for i in range(2):
         np.testing.assert_allclose(np.load(tmp_path / f"part{i}.npy"), one, rtol=1e-5, atol=1e-6)

@@ -24,9 +24,10 @@ from radiometria.render import (
     path_radiance,
     sample_dimensions,
     sample_hero_wavelengths,
-    spectrum_values,
+    tabulate_spectrum,
     wavelength_grid_nm,
 )
+from radiometria.upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
 
 DEPTH = 4
 N_PATHS = 64
@@ -37,9 +38,11 @@ def _setup(n_paths=N_PATHS, depth=DEPTH):
     """The Cornell box as a float64 Lambertian `RenderScene`, and `n_paths` camera paths."""
     desc = load_scene("cornell-box")
     reflectance = np.stack(
-        [spectrum_values(m.params["reflectance"], "albedo") for m in desc.materials]
+        [tabulate_spectrum(m.params["reflectance"], RGBAlbedoSpectrum) for m in desc.materials]
     )
-    radiance = np.stack([spectrum_values(e.radiance, "illuminant") for e in desc.emitters])
+    radiance = np.stack(
+        [tabulate_spectrum(e.radiance, RGBIlluminantSpectrum) for e in desc.emitters]
+    )
     scene = RenderScene.from_triangles(
         desc.vertices,
         desc.faces,
@@ -55,7 +58,7 @@ def _setup(n_paths=N_PATHS, depth=DEPTH):
     origins, directions = camera.generate_ray(u[:, :2] * 8.0)  # anywhere in the 8 x 8 image
     wavelength_nm, _ = sample_hero_wavelengths(u[:, 2])
     red = [m.name for m in desc.materials].index("red")
-    rgb = jnp.asarray(desc.materials[red].params["reflectance"]["rgb"], jnp.float64)
+    rgb = jnp.asarray(desc.materials[red].params["reflectance"].rgb, jnp.float64)
     rays = (origins.astype(jnp.float64), directions.astype(jnp.float64), wavelength_nm)
     return (scene, rays, u[:, 3:]), red, rgb
 
@@ -67,8 +70,9 @@ def _radiance(rgb, data, *, red, compact=True, depth=DEPTH, rr_depth=DEPTH):
     scene, (origins, directions, wavelength_nm), u = data
     grid = jnp.asarray(wavelength_grid_nm())
     row = rm.upsampling.RGBAlbedoSpectrum(rm.upsampling.get_lut("sRGB"), rgb)(grid)
-    values = scene.materials.reflectance.values.at[red].set(row)
-    scene = eqx.tree_at(lambda s: s.materials.reflectance.values, scene, values)
+    (diffuse,) = scene.materials.plugins  # one Lambertian plugin, rows in material order
+    values = diffuse.reflectance.table.values.at[red].set(row)
+    scene = eqx.tree_at(lambda s: s.materials.plugins[0].reflectance.table.values, scene, values)
     radiance = path_radiance(
         scene,
         origins,

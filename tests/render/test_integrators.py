@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from radiometria.camera import PinholeCamera
-from radiometria.render import RenderScene, SpectrumTable, render, wavelength_grid_nm
+from radiometria.render import Direct, Path, RenderScene, SpectrumTable, render, wavelength_grid_nm
 
 from ._synthetic import constant_table, inward_cube, merge, quad
 
@@ -36,7 +36,15 @@ def test_path_white_furnace(albedo):
     cam = PinholeCamera.from_look_at(
         np.array([0.1, 0.2, -0.3]), np.array([0.5, 0.3, 1.0]), np.array([0.0, 1, 0]), 70.0, 16, 16
     )
-    xyz = render(scene, camera=cam, spp=64, max_depth=80, seed=1, progress=False, return_xyz=True)
+    xyz = render(
+        scene,
+        camera=cam,
+        spp=64,
+        integrator=Path(max_depth=80),
+        seed=1,
+        progress=False,
+        return_xyz=True,
+    )
     expected = le / (1.0 - albedo)
     # Y of a constant spectrum is the constant itself (the film's normalisation).
     assert np.mean(xyz[..., 1]) == pytest.approx(expected, rel=5e-3)
@@ -56,7 +64,7 @@ def _irradiance_below_rectangle_centre(a, b, h, le):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("integrator", ["direct", "path"])
+@pytest.mark.parametrize("integrator", [Direct(), Path(max_depth=2)], ids=["direct", "path"])
 def test_direct_irradiance_under_rectangle_light(integrator):
     """Diffuse floor under a one-sided rectangular light: L = albedo / pi * E (closed form)."""
     a, b, h, le, albedo = 1.0, 0.6, 0.8, 3.0, 0.6
@@ -75,7 +83,6 @@ def test_direct_irradiance_under_rectangle_light(integrator):
         scene,
         camera=cam,
         spp=256,
-        max_depth=2,
         integrator=integrator,
         seed=3,
         progress=False,
@@ -98,12 +105,12 @@ def _emitter_in_view():
 def test_blackbody_emitter_seen_directly():
     """A blackbody light (thesis eq. 1.24) seen directly: Y = s int B(l, T) ybar / int ybar."""
     from radiometria.colorimetry import get_cmfs
-    from radiometria.render._spectral import spectrum_values
+    from radiometria.radiometry import BlackbodySpectrum
+    from radiometria.render import tabulate_spectrum
+    from radiometria.upsampling import RGBIlluminantSpectrum
 
     temperature, scale = 4000.0, 1e-4
-    values = spectrum_values(
-        {"blackbody": {"temperature": temperature, "scale": scale}}, "illuminant"
-    )
+    values = tabulate_spectrum(BlackbodySpectrum(temperature, scale), RGBIlluminantSpectrum)
     grid = wavelength_grid_nm()
     cmfs = get_cmfs()
     ybar = np.interp(grid, np.asarray(cmfs.wavelengths_nm), np.asarray(cmfs.values)[:, 1])
@@ -111,28 +118,33 @@ def test_blackbody_emitter_seen_directly():
     v, f, cam = _emitter_in_view()
     table = SpectrumTable(jnp.asarray(values[None], jnp.float32))
     scene = RenderScene.from_triangles(v, f, [0, 0], constant_table(0.0), [0, 0], table)
-    xyz = render(scene, camera=cam, spp=64, max_depth=1, progress=False, return_xyz=True)
+    xyz = render(
+        scene, camera=cam, spp=64, integrator=Path(max_depth=1), progress=False, return_xyz=True
+    )
     assert np.mean(xyz[..., 1]) == pytest.approx(expected, rel=5e-3)
 
 
-def test_spectrum_values_forms():
+def test_tabulate_spectrum_forms():
     """Scene spectra on the 1 nm grid: tabulated (zero outside), constant, blackbody, RGB."""
-    from radiometria.radiometry import planck
-    from radiometria.render._spectral import spectrum_values
+    from radiometria.radiometry import BlackbodySpectrum, PiecewiseLinearSpectrum, planck
+    from radiometria.render import LinearRGB, tabulate_spectrum
+    from radiometria.upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
 
     grid = wavelength_grid_nm()
-    tab = spectrum_values({"spectrum": (np.array([400.0, 500.0]), np.array([1.0, 3.0]))}, "albedo")
+    measured = PiecewiseLinearSpectrum(np.array([400.0, 500.0]), np.array([1.0, 3.0]))
+    tab = tabulate_spectrum(measured, RGBAlbedoSpectrum)
+    assert tab.dtype == np.float64 and tab.shape == grid.shape
     np.testing.assert_allclose(tab[grid == 450.0], 2.0)
     assert tab[grid == 399.0] == 0.0 and tab[grid == 501.0] == 0.0
-    np.testing.assert_allclose(spectrum_values({"value": 0.25}, "albedo"), 0.25)
-    bb = spectrum_values({"blackbody": {"temperature": 5000.0, "scale": 2.0}}, "illuminant")
+    np.testing.assert_allclose(tabulate_spectrum(0.25, RGBAlbedoSpectrum), 0.25)
+    bb = tabulate_spectrum(BlackbodySpectrum(5000.0, 2.0), RGBIlluminantSpectrum)
     np.testing.assert_allclose(bb, 2.0 * np.asarray(planck(grid, 5000.0)), rtol=1e-6)
-    grey = spectrum_values({"rgb": np.array([0.5, 0.5, 0.5])}, "albedo")
+    grey = tabulate_spectrum(LinearRGB(np.array([0.5, 0.5, 0.5])), RGBAlbedoSpectrum)
     np.testing.assert_allclose(grey, 0.5, atol=1e-3)
     with pytest.raises(ValueError, match="reflectance"):
-        spectrum_values({"rgb": np.array([1.5, 0.2, 0.2])}, "albedo")
-    with pytest.raises(ValueError, match="form"):
-        spectrum_values({"texture": "wood.png"}, "albedo")
+        tabulate_spectrum(LinearRGB(np.array([1.5, 0.2, 0.2])), RGBAlbedoSpectrum)
+    with pytest.raises(TypeError, match=r"(?s)LinearRGB.*wood\.png|wood\.png.*LinearRGB"):
+        tabulate_spectrum("wood.png", RGBAlbedoSpectrum)
 
 
 def test_sample_hero_wavelengths_stratified_and_unbiased():
@@ -185,5 +197,5 @@ def test_scene_without_emitters_renders_black():
     cam = PinholeCamera.from_look_at(
         np.zeros(3), np.array([0.0, 0, 1]), np.array([0.0, 1, 0]), 60.0, 8, 8
     )
-    img = np.asarray(render(scene, camera=cam, spp=2, max_depth=3, progress=False))
+    img = np.asarray(render(scene, camera=cam, spp=2, integrator=Path(max_depth=3), progress=False))
     np.testing.assert_array_equal(img, 0.0)

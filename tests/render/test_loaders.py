@@ -5,7 +5,8 @@ import textwrap
 import numpy as np
 import pytest
 
-from radiometria.render import SceneError, load_mesh, load_mitsuba_xml, load_scene
+from radiometria.radiometry import BlackbodySpectrum
+from radiometria.render import LinearRGB, SceneError, load_mesh, load_mitsuba_xml, load_scene
 
 SCENE = """\
 <scene version="3.0.0">
@@ -70,15 +71,17 @@ def test_mitsuba_xml_loads_the_subset(scene_file):
     assert s.n_triangles == 2 + 12 + 4 + 2
     gray, gold, glass, _ = s.materials
     assert gray.type == "diffuse" and gray.two_sided and gray.name == "gray"
-    np.testing.assert_allclose(gray.params["reflectance"]["rgb"], [0.2, 0.3, 0.4])
+    assert isinstance(gray.params["reflectance"], LinearRGB)
+    np.testing.assert_allclose(gray.params["reflectance"].rgb, [0.2, 0.3, 0.4])
     assert gold.type == "roughconductor" and gold.params["material"] == "Au"
-    assert gold.params["alpha"] == {"value": 0.2}
-    assert glass.type == "dielectric" and glass.params["int_ior"] == {"value": 1.5}
+    assert gold.params["alpha"] == 0.2
+    assert glass.type == "dielectric" and glass.params["int_ior"] == 1.5
     (light,) = s.emitters
-    assert light.radiance == {"blackbody": {"temperature": 4000.0, "scale": 1.0}}
+    assert isinstance(light.radiance, BlackbodySpectrum)
+    assert float(light.radiance.temperature) == 4000.0 and float(light.radiance.scale) == 1.0
     np.testing.assert_allclose(light.total_area, 0.36)
     assert s.face_material[s.face_shape == 3][0] == 3  # the light got Mitsuba's default BSDF
-    assert s.materials[3].params == {"reflectance": {"value": 0.5}}
+    assert s.materials[3].params == {"reflectance": 0.5}
     assert (s.camera.fov_deg, s.camera.fov_axis) == (40.0, "y")
     assert (s.film.width, s.film.height, s.film.filter) == (64, 48, "tent")
     assert s.max_depth == 6 and s.spp == 16

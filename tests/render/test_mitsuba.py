@@ -7,7 +7,7 @@ makes the full 256 x 256 comparison. Mitsuba is a test dependency (`pip install 
 import numpy as np
 import pytest
 
-from radiometria.render import render
+from radiometria.render import OwenSobol, render
 
 from ._mitsuba import (
     cornell_box_materials_xml,
@@ -33,7 +33,7 @@ def reference():
 def test_cornell_box_means_match_mitsuba(reference):
     """Per-channel image means within 1 % (RGB reflectances upsampled, RGB light x D65)."""
     ours = np.asarray(
-        render("cornell-box", spp=256, width=SIZE, height=SIZE, sampler="sobol", progress=False)
+        render("cornell-box", spp=256, width=SIZE, height=SIZE, sampler=OwenSobol(), progress=False)
     )
     np.testing.assert_allclose(ours.mean(axis=(0, 1)), reference.mean(axis=(0, 1)), rtol=0.01)
 
@@ -53,7 +53,7 @@ def test_cornell_box_from_mitsuba_xml_matches_mitsuba(tmp_path):
     path = tmp_path / "cornell_box.xml"
     path.write_text(cornell_box_xml(SIZE, SIZE))
     theirs = render_mitsuba(mi.load_file(str(path)), REF_SPP, seed=3)
-    ours = np.asarray(render(path, spp=256, sampler="sobol", progress=False))
+    ours = np.asarray(render(path, spp=256, sampler=OwenSobol(), progress=False))
     assert ours.shape == (SIZE, SIZE, 3)
     np.testing.assert_allclose(ours.mean(axis=(0, 1)), theirs.mean(axis=(0, 1)), rtol=0.01)
 
@@ -69,5 +69,5 @@ def test_mirror_gold_and_glass_match_mitsuba(tmp_path):
     path = tmp_path / "cornell_box_materials.xml"
     path.write_text(cornell_box_materials_xml(SIZE, SIZE))
     theirs = render_mitsuba(mi.load_file(str(path)), 2 * REF_SPP, seed=4)
-    ours = np.asarray(render(path, spp=512, sampler="sobol", progress=False))
+    ours = np.asarray(render(path, spp=512, sampler=OwenSobol(), progress=False))
     np.testing.assert_allclose(ours.mean(axis=(0, 1)), theirs.mean(axis=(0, 1)), rtol=0.02)

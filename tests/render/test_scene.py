@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from radiometria.render import SceneError, load_scene, triangle_normals
+from radiometria.radiometry import PiecewiseLinearSpectrum
+from radiometria.render import LinearRGB, SceneError, load_scene, triangle_normals
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 DATA = Path(__file__).resolve().parents[2] / "radiometria" / "render" / "data"
@@ -34,12 +35,13 @@ def test_cornell_box_builtin():
     assert s.n_triangles == 36 and len(s.vertices) == 4 * 6 + 8 * 2
     assert [m.name for m in s.materials] == ["white", "green", "red"]
     assert all(m.type == "diffuse" and not m.two_sided for m in s.materials)
-    np.testing.assert_allclose(
-        s.materials[2].params["reflectance"]["rgb"], [0.570068, 0.0430135, 0.0443706]
-    )
+    red = s.materials[2].params["reflectance"]
+    assert isinstance(red, LinearRGB)
+    np.testing.assert_allclose(red.rgb, [0.570068, 0.0430135, 0.0443706])
     (light,) = s.emitters
     np.testing.assert_allclose(light.total_area, 0.46 * 0.38, rtol=1e-6)
-    np.testing.assert_allclose(light.radiance["rgb"], [18.387, 13.9873, 6.75357])
+    assert isinstance(light.radiance, LinearRGB)
+    np.testing.assert_allclose(light.radiance.rgb, [18.387, 13.9873, 6.75357])
     assert np.all(s.face_emitter[light.triangles] == 0) and np.sum(s.face_emitter >= 0) == 2
     n = np.asarray(triangle_normals(s.vertices, s.faces[light.triangles]))
     np.testing.assert_allclose(n, [[0, -1, 0]] * 2, atol=1e-7)  # the light faces down
@@ -75,11 +77,14 @@ def test_cornell_box_measured_builtin():
     s = load_scene("cornell-box-measured")
     assert s.n_triangles == 2 * (6 + 5 + 5) and s.unit == "mm"
     assert [m.name for m in s.materials] == ["white", "green", "red"]
-    wl, refl = s.materials[0].params["reflectance"]["spectrum"]
+    white = s.materials[0].params["reflectance"]
+    assert isinstance(white, PiecewiseLinearSpectrum)
+    wl, refl = np.asarray(white.wavelengths_nm), np.asarray(white.values)
     assert len(wl) == len(refl) == 76 and wl[0] == 400 and wl[-1] == 700
     (light,) = s.emitters
     np.testing.assert_allclose(light.total_area, 130.0 * 105.0)
-    wl, val = light.radiance["spectrum"]
+    assert isinstance(light.radiance, PiecewiseLinearSpectrum)
+    wl, val = light.radiance.wavelengths_nm, light.radiance.values
     np.testing.assert_allclose(wl, [400, 500, 600, 700])
     np.testing.assert_allclose(val, [0.0, 8.0, 15.6, 18.4])
     # the light sits just below the ceiling, facing down
