@@ -52,7 +52,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jax.experimental import multihost_utils
-from jax.sharding import Mesh, PartitionSpec as P
+from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from tqdm import tqdm
 
 from .._checks import check_choice, check_positive_int
@@ -337,7 +337,11 @@ def render(
     cfg = _Config(n_pixels, plan.tile, plan.passes, width, reconstruction, tuple(devices))
     key = jax.random.key(int(seed))
     spp_arr = jnp.int32(spp)
-    film = Film(width, height, dtype=jnp.float32)
+    # The film lives where the step leaves it (replicated over the mesh), so that the first
+    # step and the later ones share one compiled program (an uncommitted first film would be
+    # a different jit signature and compile the step twice).
+    mesh = Mesh(np.asarray(cfg.devices), ("pixels",))
+    film = jax.device_put(Film(width, height, dtype=jnp.float32), NamedSharding(mesh, P()))
 
     # Multi-host: process i of m takes steps i, i + m, ...; the films are summed at the end.
     n_proc, proc = jax.process_count(), jax.process_index()
@@ -363,7 +367,11 @@ def render(
         film = eqx.tree_at(
             lambda f: (f.xyz_sum, f.weight_sum), film, tuple(jnp.sum(p, axis=0) for p in parts)
         )
-    return film_develop(film, "XYZ" if return_xyz else "sRGB")
+    return _develop(film, "XYZ" if return_xyz else "sRGB")
+
+
+# One compiled program for the development (op by op, each of its operations would compile).
+_develop = eqx.filter_jit(film_develop)
 
 
 def _check_plugin(value, name: str, base: type, registry: dict, example: str) -> None:
