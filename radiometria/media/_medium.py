@@ -19,6 +19,9 @@ class MediumInteraction(eqx.Module):
     - `weight`: the estimator's throughput weight for the segment `(n, k)`, at the path's
         wavelengths (`sigma_s T / pdf` at a scattering event, `T / P(no event)` past it).
         [1]
+
+    ??? cite "References"
+        `Pharr2023` §11.4 (free-flight sampling); `Novak2018` §4.
     """
 
     t: Float[Array, " n"]

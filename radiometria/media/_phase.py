@@ -15,6 +15,9 @@ class PhaseSample(eqx.Module):
         [unit vector]
     - `value`: the phase function $p(\\omega_o, \\omega_i)$ `(...)`. [sr^-1]
     - `pdf`: the solid-angle density of `wi` `(...)`. [sr^-1]
+
+    ??? cite "References"
+        `Pharr2023` §11.3.1 (`PhaseFunctionSample`).
     """
 
     wi: Float[Array, "*batch 3"]
