@@ -10,8 +10,9 @@ significant digit (relative 1.5e-6 for h, 2.6e-6 for k). Planck radiances comput
 differ from ones computed with the thesis's printed constants by a few parts per million.
 
 ??? cite "References"
-    `BIPM2019` (the SI Brochure, 9th ed., table 1); `CIE2018` (CIE 015:2018) for K_m and K_m'
-    and the visible range; `Pharr2023` section 4.5 (`Lambda_min`, `Lambda_max`).
+    `BIPM2019` (the SI Brochure, 9th ed., table 1); `Mohr2025` (CODATA 2022) for mu_0;
+    `CIE2018` (CIE 015:2018) for K_m and K_m' and the visible range; `Pharr2023` section 4.5
+    (`Lambda_min`, `Lambda_max`).
 """
 
 import math
@@ -22,6 +23,14 @@ SPEED_OF_LIGHT = 299792458.0  # m s^-1, exact (SI 2019)
 BOLTZMANN = 1.380649e-23  # J K^-1, exact (SI 2019)
 K_CD = 683.0  # lm W^-1, luminous efficacy of 540e12 Hz radiation, exact (SI 2019)
 FREQUENCY_K_CD = 540e12  # Hz, the frequency at which K_CD is defined (SI 2019)
+
+# --- Electromagnetic constants (thesis section 1.1) ------------------------------------------
+# Since the 2019 redefinition of the SI, the magnetic constant mu_0 is measured, no longer exact
+# (4 pi 1e-7 before). CODATA 2022 value (`Mohr2025`, relative standard uncertainty 1.6e-10),
+# the one scipy.constants uses; CODATA 2018 (`Tiesinga2021`) gave 1.25663706212e-6.
+VACUUM_PERMEABILITY = 1.25663706127e-6  # N A^-2, mu_0 (CODATA 2022, not exact since SI 2019)
+# eps_0 = 1 / (mu_0 c^2)  (thesis section 1.1)
+VACUUM_PERMITTIVITY = 1.0 / (VACUUM_PERMEABILITY * SPEED_OF_LIGHT**2)  # F m^-1
 
 # --- Derived radiometric constants --------------------------------------------------------
 # Stefan-Boltzmann: sigma = 2 pi^5 k^4 / (15 h^3 c^2)  (thesis eq. 1.22)

@@ -74,3 +74,24 @@ def test_constants_k_m_photopic_from_k_cd():
 def test_constants_k_m_scotopic_from_k_cd():
     # K'_m = K_cd V'(507 nm) / V'(555.016 nm): the scotopic curve also gives 683 lm/W at 540 THz.
     assert round(c.K_CD / _v_at_k_cd("scotopic"), 2) == pytest.approx(c.K_M_SCOTOPIC, abs=0.005)
+
+
+def test_constants_vacuum_permeability_and_permittivity_match_scipy():
+    # mu_0 is measured since SI 2019: CODATA 2022 (SciPy >= 1.15 too) gives 1.25663706127(20)e-6
+    # N A^-2. A later CODATA adjustment moves it by a few 1e-10 relative, hence rel=1e-9.
+    value, unit, uncertainty = sc.physical_constants["vacuum mag. permeability"]
+    assert unit == "N A^-2" and uncertainty > 0.0
+    assert c.VACUUM_PERMEABILITY == pytest.approx(value, rel=1e-9)
+    # eps_0 = 1 / (mu_0 c^2), derived, not retyped.
+    value, unit, _ = sc.physical_constants["vacuum electric permittivity"]
+    assert unit == "F m^-1"
+    assert c.VACUUM_PERMITTIVITY == pytest.approx(value, rel=1e-9)
+    if sc.mu_0 == 1.25663706127e-6:  # SciPy with CODATA 2022, the adjustment used here
+        assert c.VACUUM_PERMEABILITY == sc.mu_0
+        # CODATA prints eps_0 to 11 digits: equal to rounding.
+        assert c.VACUUM_PERMITTIVITY == pytest.approx(sc.epsilon_0, rel=1e-11)
+    assert c.VACUUM_PERMITTIVITY * c.VACUUM_PERMEABILITY * c.SPEED_OF_LIGHT**2 == pytest.approx(
+        1.0, rel=1e-15
+    )
+    # Within its uncertainty of the pre-2019 exact value 4 pi 1e-7.
+    assert c.VACUUM_PERMEABILITY == pytest.approx(4e-7 * math.pi, rel=1e-9)

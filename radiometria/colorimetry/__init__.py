@@ -2,8 +2,11 @@
 
 - CIE tables with provenance (`get_cmfs`, `get_illuminant`, `daylight_spd`; `_data` docstring);
 - spectrum -> XYZ, emissive and reflective (`sd_to_XYZ`, `tristimulus_weights`; thesis eq.
-  2.12-2.19), XYZ <-> xyY <-> xy (eq. 2.20-2.22), CIE 1931 RGB (eq. 2.11);
-- CIELAB / LCh, CIE 1960 uv and 1976 u'v', colour differences Delta E 1976 / 1994 / 2000;
+  2.12-2.19), XYZ <-> xyY <-> xy (eq. 2.20-2.22);
+- the CIE 1931 RGB system: spectrum -> RGB with the r̄ḡb̄ CMFs (`sd_to_CIE_RGB`, eq.
+  2.6-2.9), its luminance (`CIE_RGB_luminance`, eq. 2.10), RGB <-> XYZ (eq. 2.11);
+- CIELAB / LCh, CIELUV / LCHuv, CIE 1960 uv and 1976 u'v', colour differences Delta E
+  1976 / 1994 / 2000;
 - RGB colour spaces with derived matrices and transfer functions, chromatic adaptation,
   sRGB (thesis 2.2.2);
 - Planckian locus and correlated colour temperature (thesis 2.2.1, table 2.1).
@@ -34,12 +37,18 @@ from ._models import (
     Lab_to_LCh as Lab_to_LCh,
     Lab_to_XYZ as Lab_to_XYZ,
     LCh_to_Lab as LCh_to_Lab,
+    LCHuv_to_Luv as LCHuv_to_Luv,
+    Luv_to_LCHuv as Luv_to_LCHuv,
+    Luv_to_uv as Luv_to_uv,
+    Luv_to_XYZ as Luv_to_XYZ,
     Luv_uv_to_xy as Luv_uv_to_xy,
     UCS_uv_to_xy as UCS_uv_to_xy,
     XYZ_to_CIE_RGB as XYZ_to_CIE_RGB,
     XYZ_to_Lab as XYZ_to_Lab,
+    XYZ_to_Luv as XYZ_to_Luv,
     XYZ_to_Luv_uv as XYZ_to_Luv_uv,
     XYZ_to_UCS_uv as XYZ_to_UCS_uv,
+    uv_to_Luv as uv_to_Luv,
     xy_to_Luv_uv as xy_to_Luv_uv,
     xy_to_UCS_uv as xy_to_UCS_uv,
 )
@@ -72,8 +81,10 @@ from ._temperature import (
     xy_to_CCT as xy_to_CCT,
 )
 from ._tristimulus import (
+    CIE_RGB_luminance as CIE_RGB_luminance,
     XYZ_to_xy as XYZ_to_xy,
     XYZ_to_xyY as XYZ_to_xyY,
+    sd_to_CIE_RGB as sd_to_CIE_RGB,
     sd_to_XYZ as sd_to_XYZ,
     tristimulus_weights as tristimulus_weights,
     xy_to_xyY as xy_to_xyY,

@@ -145,6 +145,11 @@ def resolve_observer(observer: str, *, allow_rgb: bool = True) -> str:
     if not isinstance(observer, str):
         raise TypeError(f"`observer` must be a name (str), got {type(observer).__name__}.")
     name = OBSERVER_ALIASES.get(observer, observer)
+    if not allow_rgb and name in CMFS_RGB:
+        raise ValueError(
+            f"`observer` must be an XYZ observer here; {observer!r} has r, g, b colour-matching "
+            "functions (CIE 1931 RGB tristimulus values come from `sd_to_CIE_RGB`)."
+        )
     valid = list(CMFS_XYZ) + (list(CMFS_RGB) if allow_rgb else [])
     aliases = [a for a, c in OBSERVER_ALIASES.items() if c in valid]
     if name not in valid:

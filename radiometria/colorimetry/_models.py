@@ -1,5 +1,5 @@
-r"""Colour models derived from CIE XYZ: CIELAB, CIELCh, CIE 1960 UCS uv, CIE 1976 u'v',
-and the CIE 1931 RGB system (thesis eq. 2.11)."""
+r"""Colour models derived from CIE XYZ: CIELAB, CIELCh, CIELUV, CIELCh(uv), CIE 1960 UCS uv,
+CIE 1976 u'v', and the CIE 1931 RGB system (thesis eq. 2.11)."""
 
 import jax.numpy as jnp
 import numpy as np
@@ -213,6 +213,179 @@ def Luv_uv_to_xy(uv: Float[ArrayLike, "*batch 2"]) -> Float[Array, "*batch 2"]:
     u, v = uv[..., 0], uv[..., 1]
     d = 6.0 * u - 16.0 * v + 12.0
     return jnp.stack([9.0 * u / d, 4.0 * v / d], axis=-1)
+
+
+def _luv_uv_prime(XYZ: Array) -> tuple[Array, Array]:
+    """u' = 4X/(X+15Y+3Z), v' = 9Y/(X+15Y+3Z); black gives (0, 0) with zero gradients."""
+    X, Y, Z = XYZ[..., 0], XYZ[..., 1], XYZ[..., 2]
+    d = X + 15.0 * Y + 3.0 * Z
+    return _ratio(4.0 * X, d), _ratio(9.0 * Y, d)
+
+
+def XYZ_to_Luv(XYZ: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array, "*batch 3"]:
+    r"""CIE XYZ -> CIELUV (CIE 1976 L*u*v*).
+
+    $L^* = 116 f(Y/Y_n) - 16$ (as in CIELAB), $u^* = 13 L^*(u' - u'_n)$,
+    $v^* = 13 L^*(v' - v'_n)$, with the CIE 1976 UCS chromaticities
+    $u' = 4X/(X + 15Y + 3Z)$, $v' = 9Y/(X + 15Y + 3Z)$ of the colour and of the white.
+    Black gives (0, 0, 0).
+
+    **Arguments:**
+
+    - `XYZ`: (..., 3), same scale as the white. [dimensionless, Y = 1 for the white]
+    - `white_XYZ`: reference white (..., 3); default CIE D65 with Y = 1. [dimensionless]
+
+    **Returns:**
+
+    Luv (..., 3): L* in [0, 100] for Y in [0, Y_n], u*, v*. [dimensionless]
+
+    !!! note "Thesis"
+        Section 2.2.1 (uniform colour spaces derived from XYZ and xy).
+
+    ??? cite "References"
+        `CIE2018` section 8.2.2; `Wyszecki2000` section 3.3.9.
+    """
+    XYZ = _vec3(XYZ, "XYZ")
+    XYZ, w = jnp.broadcast_arrays(XYZ, _white(white_XYZ, XYZ.dtype))
+    L = 116.0 * _f_lab(XYZ[..., 1] / w[..., 1]) - 16.0
+    u_p, v_p = _luv_uv_prime(XYZ)
+    u_n, v_n = _luv_uv_prime(w)
+    return jnp.stack([L, 13.0 * L * (u_p - u_n), 13.0 * L * (v_p - v_n)], axis=-1)
+
+
+def Luv_to_XYZ(Luv: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array, "*batch 3"]:
+    r"""CIELUV -> CIE XYZ, the inverse of `XYZ_to_Luv` (default white D65, Y = 1).
+
+    $Y = Y_n f^{-1}((L^* + 16)/116)$, $u' = u^*/(13 L^*) + u'_n$, $v' = v^*/(13 L^*) + v'_n$,
+    $X = Y\,9u'/(4v')$, $Z = Y\,(12 - 3u' - 20v')/(4v')$. L* = 0 gives black; so does
+    $v' = 0$ (no real colour has it), with zero gradients in both cases.
+
+    **Arguments:**
+
+    - `Luv`: (..., 3). [dimensionless]
+    - `white_XYZ`: reference white (..., 3); default CIE D65 with Y = 1. [dimensionless]
+
+    **Returns:**
+
+    XYZ (..., 3) in the scale of the white. [dimensionless]
+
+    !!! note "Thesis"
+        Section 2.2.1.
+
+    ??? cite "References"
+        `CIE2018` section 8.2.2; `Wyszecki2000` section 3.3.9.
+    """
+    Luv = _vec3(Luv, "Luv")
+    Luv, w = jnp.broadcast_arrays(Luv, _white(white_XYZ, Luv.dtype))
+    L, u, v = Luv[..., 0], Luv[..., 1], Luv[..., 2]
+    Y = _f_lab_inverse((L + 16.0) / 116.0) * w[..., 1]
+    u_n, v_n = _luv_uv_prime(w)
+    black = L == 0
+    thirteen_L = 13.0 * jnp.where(black, 1.0, L)
+    u_p = u / thirteen_L + u_n
+    v_p = v / thirteen_L + v_n
+    four_v = 4.0 * v_p
+    k = jnp.where(black, 0.0, _ratio(Y, four_v))  # Y / (4 v'), 0 for black or v' = 0
+    return jnp.stack(
+        [9.0 * u_p * k, jnp.where(black, 0.0, Y), (12.0 - 3.0 * u_p - 20.0 * v_p) * k], axis=-1
+    )
+
+
+def Luv_to_LCHuv(Luv: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+    r"""CIELUV -> CIELCh(uv): L*, chroma $C^*_{uv} = \sqrt{u^{*2} + v^{*2}}$, hue $h_{uv}$.
+
+    **Arguments:**
+
+    - `Luv`: (..., 3). [dimensionless]
+
+    **Returns:**
+
+    LCHuv (..., 3): L* and C*_uv [dimensionless], h_uv in [0, 360) [degrees]; the hue of a
+    neutral (u* = v* = 0) is 0, with zero gradients.
+
+    !!! note "Thesis"
+        Section 2.2.1.
+
+    ??? cite "References"
+        `CIE2018` section 8.2.2.
+    """
+    Luv = _vec3(Luv, "Luv")
+    L, u, v = Luv[..., 0], Luv[..., 1], Luv[..., 2]
+    return jnp.stack([L, _safe_norm2(u, v), _hue_degrees(v, u)], axis=-1)
+
+
+def LCHuv_to_Luv(LCHuv: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
+    r"""CIELCh(uv) -> CIELUV: $u^* = C^*_{uv}\cos h_{uv}$, $v^* = C^*_{uv}\sin h_{uv}$.
+
+    **Arguments:**
+
+    - `LCHuv`: (..., 3): L*, C*_uv [dimensionless] and h_uv [degrees].
+
+    **Returns:**
+
+    Luv (..., 3). [dimensionless] The inverse of `Luv_to_LCHuv`.
+
+    !!! note "Thesis"
+        Section 2.2.1.
+
+    ??? cite "References"
+        `CIE2018` section 8.2.2.
+    """
+    LCHuv = _vec3(LCHuv, "LCHuv")
+    L, C, h = LCHuv[..., 0], LCHuv[..., 1], jnp.radians(LCHuv[..., 2])
+    return jnp.stack([L, C * jnp.cos(h), C * jnp.sin(h)], axis=-1)
+
+
+def Luv_to_uv(Luv: Float[ArrayLike, "*batch 3"], white_XYZ=None) -> Float[Array, "*batch 2"]:
+    r"""CIELUV -> CIE 1976 UCS chromaticity u'v' of the colour (black gives (0, 0)).
+
+    **Arguments:**
+
+    - `Luv`: (..., 3). [dimensionless]
+    - `white_XYZ`: reference white (..., 3); default CIE D65 with Y = 1. [dimensionless]
+
+    **Returns:**
+
+    u'v' (..., 2). [dimensionless] `uv_to_Luv` goes back, given L*.
+
+    !!! note "Thesis"
+        Section 2.2.1.
+
+    ??? cite "References"
+        `CIE2018` sections 8.1 and 8.2.2.
+    """
+    return XYZ_to_Luv_uv(Luv_to_XYZ(Luv, white_XYZ))
+
+
+def uv_to_Luv(
+    uv: Float[ArrayLike, "*batch 2"], white_XYZ=None, L: ArrayLike = 100.0
+) -> Float[Array, "*batch 3"]:
+    r"""CIE 1976 UCS chromaticity u'v' and lightness L* -> CIELUV.
+
+    $u^* = 13 L^*(u' - u'_n)$, $v^* = 13 L^*(v' - v'_n)$.
+
+    **Arguments:**
+
+    - `uv`: u'v' chromaticity (..., 2). [dimensionless]
+    - `white_XYZ`: reference white (..., 3); default CIE D65 with Y = 1. [dimensionless]
+    - `L`: lightness L*, broadcasting with the batch shape; default 100. [dimensionless]
+
+    **Returns:**
+
+    Luv (..., 3). [dimensionless] The inverse of `Luv_to_uv` for L* > 0.
+
+    !!! note "Thesis"
+        Section 2.2.1.
+
+    ??? cite "References"
+        `CIE2018` sections 8.1 and 8.2.2.
+    """
+    uv = check_last_axis(as_float_array(uv, "uv"), "uv", 2)
+    w = _white(white_XYZ, uv.dtype)
+    u_n, v_n = _luv_uv_prime(w)
+    L = jnp.asarray(as_float_array(L, "L"), dtype=uv.dtype)
+    L, u_p, v_p, u_n, v_n = jnp.broadcast_arrays(L, uv[..., 0], uv[..., 1], u_n, v_n)
+    return jnp.stack([L, 13.0 * L * (u_p - u_n), 13.0 * L * (v_p - v_n)], axis=-1)
 
 
 def CIE_RGB_to_XYZ(RGB: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:

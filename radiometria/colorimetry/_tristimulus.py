@@ -1,4 +1,4 @@
-r"""Spectrum -> CIE XYZ tristimulus values (thesis eq. 2.12-2.19).
+r"""Spectrum -> CIE XYZ (thesis eq. 2.12-2.19) and CIE 1931 RGB (eq. 2.6-2.10) tristimulus values.
 
 Integration method (CIE 015:2018 section 7.1, ASTM E308 practice): the colour-matching
 functions are interpolated *linearly* onto the spectrum's own wavelength grid (zero outside
@@ -23,6 +23,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .._checks import as_float_array, check_broadcastable, check_last_axis
 from ..constants import K_M
 from ._data import (
+    CMFS_RGB,
     CMFS_XYZ,
     DEFAULT_OBSERVER,
     ILLUMINANTS_SD,
@@ -31,6 +32,12 @@ from ._data import (
     resolve_illuminant,
     resolve_observer,
 )
+from ._models import MATRIX_CIE_RGB_TO_XYZ
+
+# The CIE 1931 RGB observer: Wright & Guild r, g, b CMFs (thesis eq. 2.7-2.9), and the row of
+# thesis eq. 2.10 that gives the luminance of RGB tristimulus values, Y = R + 4.5907 G + 0.0601 B.
+CIE_RGB_OBSERVER = "Wright & Guild 1931 2 Degree RGB CMFs"
+_CIE_RGB_LUMINANCE_ROW = MATRIX_CIE_RGB_TO_XYZ[1]
 
 
 def _grid(wavelengths_nm, name: str = "wavelengths_nm") -> Array:
@@ -110,7 +117,23 @@ def tristimulus_weights(
     """
     wl = _grid(wavelengths_nm)
     name = resolve_observer(observer, allow_rgb=False)
-    cmf_wl, cmf_v = CMFS_XYZ[name]
+    return _weights(wl, illuminant, CMFS_XYZ[name], _luminance_xyz)
+
+
+def _luminance_xyz(w: Array) -> Array:
+    """The luminance channel of XYZ weights or values (..., 3): Y."""
+    return w[..., 1]
+
+
+def _luminance_cie_rgb(w: Array) -> Array:
+    """The luminance of CIE RGB weights or values (..., 3): thesis eq. 2.10."""
+    return w @ jnp.asarray(_CIE_RGB_LUMINANCE_ROW, dtype=w.dtype)
+
+
+def _weights(wl: Array, illuminant, table, luminance) -> Array:
+    """Weights (n, 3) of the CMF `table` on the grid `wl` (see `tristimulus_weights`);
+    reflective weights are normalised so that `luminance` of a perfect reflector is 1."""
+    cmf_wl, cmf_v = table
     cmfs = interpolate_table(cmf_wl, cmf_v, wl)  # (n, 3), zero outside the table
     w = cmfs * cell_widths(wl)[:, None]
     if illuminant is None:
@@ -120,7 +143,7 @@ def tristimulus_weights(
         raise ValueError(f"`illuminant` must be one spectrum (n,) here, got shape {s.shape}.")
     s = s.astype(wl.dtype)
     w = s[:, None] * w
-    return w / jnp.sum(w[:, 1])
+    return w / jnp.sum(luminance(w))
 
 
 def sd_to_XYZ(
@@ -164,6 +187,12 @@ def sd_to_XYZ(
     ??? cite "References"
         `CIE2018` section 7.1; `ASTM2017`; `Wyszecki2000` section 3.3.
     """
+    name = resolve_observer(observer, allow_rgb=False)
+    return _sd_to_tristimulus(values, wavelengths_nm, illuminant, CMFS_XYZ[name], _luminance_xyz)
+
+
+def _sd_to_tristimulus(values, wavelengths_nm, illuminant, table, luminance) -> Array:
+    """Tristimulus values of spectra with the CMF `table` (`sd_to_XYZ`, `sd_to_CIE_RGB`)."""
     v = as_float_array(values, "values")
     wl = _grid(wavelengths_nm)
     check_last_axis(v, "values", wl.shape[0])
@@ -173,16 +202,91 @@ def sd_to_XYZ(
         or isinstance(illuminant, str | TabulatedSpectra)
         or jnp.ndim(illuminant) == 1
     ):
-        w = tristimulus_weights(wl, illuminant, observer)
-        return v @ w
+        return v @ _weights(wl, illuminant, table, luminance)
     # A batch of illuminants (..., n): normalise each separately.
     s = _illuminant_on_grid(illuminant, wl).astype(v.dtype)
     check_broadcastable(("values", v), ("illuminant", s))
     v, s = jnp.broadcast_arrays(v, s)
-    name = resolve_observer(observer, allow_rgb=False)
-    cmf_wl, cmf_v = CMFS_XYZ[name]
+    cmf_wl, cmf_v = table
     cw = interpolate_table(cmf_wl, cmf_v, wl) * cell_widths(wl)[:, None]
-    return ((v * s) @ cw) / (s @ cw[:, 1])[..., None]
+    return ((v * s) @ cw) / (s @ luminance(cw))[..., None]
+
+
+def sd_to_CIE_RGB(
+    values: Float[ArrayLike, "*batch _n"],
+    wavelengths_nm: Float[ArrayLike, " _n"],
+    illuminant=None,
+) -> Float[Array, "*batch 3"]:
+    r"""CIE 1931 RGB tristimulus values of spectra, with the r̄ḡb̄ colour-matching functions.
+
+    A colour stimulus is matched by a mixture of the three CIE 1931 primaries, monochromatic at
+    700 nm, 546.1 nm and 435.8 nm, $C = R\langle R\rangle + G\langle G\rangle +
+    B\langle B\rangle$ (thesis eq. 2.6); its tristimulus values are (eq. 2.7-2.9)
+
+    $$R = K_m\int \bar r(\lambda) L_{e,\lambda}(\lambda)\,d\lambda,\quad
+      G = K_m\int \bar g(\lambda) L_{e,\lambda}(\lambda)\,d\lambda,\quad
+      B = K_m\int \bar b(\lambda) L_{e,\lambda}(\lambda)\,d\lambda$$
+
+    with the Wright & Guild 1931 2° CMFs (`get_cmfs("CIE 1931 RGB")`, 380-780 nm at 5 nm, zero
+    outside). The thesis prints eq. 2.7-2.9 without a constant but reads the luminance off them
+    in cd m^-2 (eq. 2.10, `CIE_RGB_luminance`), which needs the $K_m$ of eq. 2.12-2.14: with
+    it, `CIE_RGB_to_XYZ(sd_to_CIE_RGB(L, wl))` is `sd_to_XYZ(L, wl)` up to the 4-5 digits to
+    which the two CIE tabulations agree. Reflective (`illuminant` given): $R = \int S\,\rho\,
+    \bar r\,d\lambda / \int S\,\bar y_{RGB}\,d\lambda$ with $\bar y_{RGB} = \bar r +
+    4.5907\,\bar g + 0.0601\,\bar b$, so a perfect reflector has luminance factor 1.
+
+    Integration as in `sd_to_XYZ`: CMFs interpolated linearly onto the spectrum's grid and a
+    rectangle (cell) sum (module docstring).
+
+    **Arguments:**
+
+    - `values`: spectra (..., n) sampled on `wavelengths_nm`; leading axes are batch axes.
+        [W sr^-1 m^-2 nm^-1 for emissive; dimensionless reflectance for reflective]
+    - `wavelengths_nm`: strictly increasing grid (n,). [nm]
+    - `illuminant`: `None` for emissive; else a name ("D65", ...), a `TabulatedSpectra`, or an
+        array (..., n) on the grid that broadcasts with `values`. [relative spectral power]
+
+    **Returns:**
+
+    CIE RGB (..., 3) [cd m^-2 luminance units for an emissive radiance; dimensionless for
+    reflectances], in the dtype of `values`. Spectral colours outside the triangle of the
+    primaries have a negative component (the negative lobes of r̄ḡb̄).
+
+    !!! note "Thesis"
+        Eq. 2.6-2.9 and eq. 2.12-2.19 (normalisation), section 2.2.
+
+    ??? cite "References"
+        `CIE1932`; `Broadbent2009` (the tabulated r̄ḡb̄); `Wyszecki2000` section 3.3.3.
+    """
+    return _sd_to_tristimulus(
+        values, wavelengths_nm, illuminant, CMFS_RGB[CIE_RGB_OBSERVER], _luminance_cie_rgb
+    )
+
+
+def CIE_RGB_luminance(RGB: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch"]:
+    r"""Luminance of CIE 1931 RGB tristimulus values, $L_v = 1.0000 R + 4.5907 G + 0.0601 B$.
+
+    The luminances of the three primaries in the ratio 1 : 4.5907 : 0.0601 (the Y row of thesis
+    eq. 2.11, so this equals `CIE_RGB_to_XYZ(RGB)[..., 1]`).
+
+    **Arguments:**
+
+    - `RGB`: CIE RGB tristimulus values (..., 3), e.g. from `sd_to_CIE_RGB`. [cd m^-2
+        luminance units, or dimensionless for reflectances]
+
+    **Returns:**
+
+    Luminance $L_v$ (...,). [cd m^-2] (the luminance factor, dimensionless, for reflective
+    values)
+
+    !!! note "Thesis"
+        Eq. 2.10, section 2.2.
+
+    ??? cite "References"
+        `CIE1932`; `Wyszecki2000` section 3.3.3.
+    """
+    RGB = check_last_axis(as_float_array(RGB, "RGB"), "RGB", 3)
+    return _luminance_cie_rgb(RGB)
 
 
 def XYZ_to_xyY(XYZ: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:

@@ -1,5 +1,9 @@
-"""Radiometry (thesis ch. 1, sections 1.4-1.5): Planck's law, spectra and radiometric quantities.
+"""Radiometry (thesis ch. 1, sections 1.1-1.5): waves, Planck's law, spectra and quantities.
 
+- Monochromatic waves (section 1.1, eq. 1.1-1.6): `period`, `angular_frequency`, vacuum and
+  in-medium wavelengths and wavenumbers (`wavenumber_vacuum`, `wavenumber_in_medium`,
+  `wavelength_in_medium_nm`), `phase_velocity` and the refractive index
+  (`refractive_index_from_permittivity`), with their inverses.
 - Blackbody radiation (section 1.5): `planck` (eq. 1.24, per nm), `planck_frequency` (per Hz),
   `planck_exitance` (eq. 1.23), `stefan_boltzmann_exitance` (eq. 1.22), and Wien's
   displacement law `planck_peak_wavelength` / `planck_peak_frequency`.
@@ -11,11 +15,17 @@
 - Closed-form relations between quantities (sections 1.1-1.4): irradiance from radiance over a
   cone or the hemisphere (eq. 1.13), Lambertian exitance, point sources and the inverse-square
   law, Lambert's cosine law, etendue and basic radiance (eq. 1.14-1.21), photon energy,
-  wavelength/frequency and per-nm/per-Hz conversions.
+  wavelength/frequency and per-nm/per-Hz conversions; the rest of table 1.2, radiant energy
+  (`radiant_energy`) and radiosity (`radiosity`).
+- Eq. 1.13 for any radiance distribution L(theta, phi) by Gauss-Legendre quadrature
+  (`irradiance_from_radiance_distribution`).
 
 Wavelengths are in nm and spectral densities per nm at every boundary; everything else is SI.
 """
 
+from ._irradiance import (
+    irradiance_from_radiance_distribution as irradiance_from_radiance_distribution,
+)
 from ._planck import (
     planck as planck,
     planck_exitance as planck_exitance,
@@ -39,6 +49,8 @@ from ._quantities import (
     radiance_from_basic_radiance as radiance_from_basic_radiance,
     radiance_from_exitance as radiance_from_exitance,
     radiance_from_irradiance as radiance_from_irradiance,
+    radiant_energy as radiant_energy,
+    radiosity as radiosity,
     spectral_density_per_hz_to_per_nm as spectral_density_per_hz_to_per_nm,
     spectral_density_per_nm_to_per_hz as spectral_density_per_nm_to_per_hz,
     wavelength_to_frequency as wavelength_to_frequency,
@@ -52,4 +64,18 @@ from ._spectrum import (
     BlackbodySpectrum as BlackbodySpectrum,
     ConstantSpectrum as ConstantSpectrum,
     PiecewiseLinearSpectrum as PiecewiseLinearSpectrum,
+)
+from ._waves import (
+    angular_frequency as angular_frequency,
+    frequency_from_angular_frequency as frequency_from_angular_frequency,
+    frequency_from_period as frequency_from_period,
+    period as period,
+    phase_velocity as phase_velocity,
+    refractive_index_from_permittivity as refractive_index_from_permittivity,
+    refractive_index_from_phase_velocity as refractive_index_from_phase_velocity,
+    wavelength_from_wavenumber as wavelength_from_wavenumber,
+    wavelength_in_medium_nm as wavelength_in_medium_nm,
+    wavelength_in_vacuum_nm as wavelength_in_vacuum_nm,
+    wavenumber_in_medium as wavenumber_in_medium,
+    wavenumber_vacuum as wavenumber_vacuum,
 )

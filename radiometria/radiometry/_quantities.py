@@ -8,11 +8,18 @@ photometric units. Angles are in radians; cosines are dimensionless.
 
 import math
 
+import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .. import constants as _c
-from .._checks import as_float_array, check_in_range, check_positive
+from .._checks import (
+    as_float_array,
+    check_axis,
+    check_broadcastable,
+    check_in_range,
+    check_positive,
+)
 from .._types import FloatLike
 
 _HC = _c.PLANCK * _c.SPEED_OF_LIGHT  # J m
@@ -163,6 +170,122 @@ def beer_lambert_transmittance(
     kappa = check_in_range(kappa, "absorption_coefficient", 0.0, math.inf, unit="m^-1")
     distance = check_in_range(_f(distance, "distance"), "distance", 0.0, math.inf, unit="m")
     return jnp.exp(-kappa * distance)
+
+
+# --- Energy and radiosity (section 1.4, table 1.2) ----------------------------------------------
+
+
+def radiant_energy(
+    flux: FloatLike,
+    time_s: FloatLike | None = None,
+    *,
+    duration_s: FloatLike | None = None,
+    axis: int = -1,
+) -> Float[Array, "..."]:
+    r"""Radiant energy delivered by a flux over time, $Q_e = \int \Phi_e(t)\,\mathrm dt$.
+
+    The flux is the time derivative of the energy, $\Phi_e = \partial Q_e/\partial t$ (def.
+    1.4.3), so the energy is its time integral. Give exactly one of:
+
+    - `time_s`: the sample times of a flux sampled along `axis`; the integral is the trapezoid
+        rule over them (nothing is assumed before the first or after the last sample);
+    - `duration_s`: an exposure time $\Delta t$ for a constant flux, $Q_e = \Phi_e\,\Delta t$
+        (elementwise, broadcasting with `flux`).
+
+    **Arguments:**
+
+    - `flux`: radiant flux $\Phi_e$. [W] (or its spectral density [W nm^-1], or luminous
+        flux [lm])
+    - `time_s`: strictly increasing sample times (n,), with n = `flux.shape[axis]` >= 2. [s]
+    - `duration_s`: duration $\Delta t$ of a constant flux, >= 0. [s]
+    - `axis`: the time axis of `flux` when `time_s` is given (static int).
+
+    **Returns:**
+
+    Radiant energy $Q_e$, with `axis` removed when integrating samples. [J] (or [J nm^-1], or
+    luminous energy [lm s])
+
+    Both or neither of `time_s` and `duration_s`, or a `time_s` that does not match `flux`,
+    raise `ValueError`; decreasing times or a negative duration raise
+    `equinox.EquinoxRuntimeError` (also under `jax.jit`).
+
+    !!! note "Thesis"
+        Thesis table 1.2 and def. 1.4.1, 1.4.3, section 1.4.
+
+    ??? cite "References"
+        `McCluney2014` (the radiometric quantities and their names).
+    """
+    flux = _f(flux, "flux")
+    if (time_s is None) == (duration_s is None):
+        raise ValueError("Give exactly one of `time_s` (sample times [s]) or `duration_s` [s].")
+    if duration_s is not None:
+        duration_s = _f(duration_s, "duration_s")
+        duration_s = check_in_range(duration_s, "duration_s", 0.0, math.inf, unit="s")
+        check_broadcastable(("flux", flux), ("duration_s", duration_s))
+        flux, duration_s = jnp.broadcast_arrays(flux, duration_s)
+        return flux * duration_s
+    time_s = _f(time_s, "time_s")
+    axis = check_axis(axis, flux.ndim, "axis") if flux.ndim else axis
+    if flux.ndim == 0 or time_s.ndim != 1 or time_s.shape[0] != flux.shape[axis]:
+        raise ValueError(
+            f"`time_s` must be 1-D with one time per sample of `flux` along axis {axis} "
+            f"[s]; got `time_s` {time_s.shape} and `flux` {flux.shape}."
+        )
+    if time_s.shape[0] < 2:
+        raise ValueError(f"`time_s` needs >= 2 sample times [s], got {time_s.shape[0]}.")
+    step = jnp.diff(time_s)
+    step = eqx.error_if(step, step <= 0, "`time_s` must be strictly increasing [s].")
+    flux = jnp.moveaxis(flux, axis, -1)
+    # trapezoid rule: sum_i (t_{i+1} - t_i) (Phi_i + Phi_{i+1}) / 2
+    step = jnp.broadcast_to(step, flux.shape[:-1] + step.shape)
+    return 0.5 * jnp.sum(step * (flux[..., 1:] + flux[..., :-1]), axis=-1)
+
+
+def radiosity(
+    emitted_exitance: FloatLike,
+    reflected_exitance: FloatLike = 0.0,
+    transmitted_exitance: FloatLike = 0.0,
+) -> Float[Array, "..."]:
+    r"""Radiosity: all the flux per unit area leaving a surface, $J_e = M_e + M_r + M_t$.
+
+        Radiosity counts what a surface emits (its radiant exitance $M_e$), what it reflects and
+        what it transmits from the other side, per unit area; with nothing reflected or transmitted
+        it is the exitance. For a Lambertian surface of reflectance $
+    ho$ lit by irradiance $E$,
+        $M_r =
+    ho E$ (the radiosity method of `Goral1984`).
+
+        **Arguments:**
+
+        - `emitted_exitance`: radiant exitance $M_e$ of the surface's own emission, >= 0. [W m^-2]
+        - `reflected_exitance`: reflected flux per unit area, >= 0; default 0. [W m^-2]
+        - `transmitted_exitance`: flux transmitted through the surface per unit area, leaving it on
+            the same side, >= 0; default 0. [W m^-2]
+
+        The three broadcast together; the same holds for their spectral densities [W m^-2 nm^-1]
+        and for the photometric analogue, luminous exitance [lm m^-2].
+
+        **Returns:**
+
+        Radiosity $J_e$. [W m^-2]
+
+        !!! note "Thesis"
+            Thesis table 1.2 and def. 1.4.4, section 1.4.
+
+        ??? cite "References"
+            `McCluney2014`; `Goral1984` (radiosity in rendering).
+    """
+    parts = []
+    for name, x in (
+        ("emitted_exitance", emitted_exitance),
+        ("reflected_exitance", reflected_exitance),
+        ("transmitted_exitance", transmitted_exitance),
+    ):
+        parts.append(check_in_range(_f(x, name), name, 0.0, math.inf, unit="W m^-2"))
+    names = ("emitted_exitance", "reflected_exitance", "transmitted_exitance")
+    check_broadcastable(*zip(names, parts, strict=True))
+    emitted, reflected, transmitted = jnp.broadcast_arrays(*parts)
+    return emitted + reflected + transmitted
 
 
 # --- Radiance, irradiance, exitance, intensity (section 1.4) ------------------------------------

@@ -95,3 +95,78 @@ def test_models_nan_propagates():
     out = rc.XYZ_to_Lab(np.array([np.nan, 0.5, 0.5]))
     assert np.isnan(float(out[1]))
     assert np.isnan(float(rc.Lab_to_LCh(np.array([50.0, np.nan, 1.0]))[1]))
+
+
+# --- CIELUV ----------------------------------------------------------------------------------
+
+
+def test_XYZ_to_Luv_matches_colour():
+    for w in (D65, D50):
+        xy_w = colour.XYZ_to_xy(w)
+        Luv = colour.XYZ_to_Luv(XYZ, xy_w)
+        np.testing.assert_allclose(rc.XYZ_to_Luv(XYZ, w), Luv, rtol=1e-12, atol=1e-11)
+        np.testing.assert_allclose(
+            rc.Luv_to_XYZ(Luv, w), colour.Luv_to_XYZ(Luv, xy_w), rtol=1e-11, atol=1e-14
+        )
+        np.testing.assert_allclose(
+            rc.Luv_to_uv(Luv, w), colour.Luv_to_uv(Luv, xy_w), rtol=1e-11, atol=1e-14
+        )
+        uv = np.asarray(rc.XYZ_to_Luv_uv(XYZ))
+        L = RNG.uniform(1.0, 100.0, len(XYZ))
+        np.testing.assert_allclose(
+            rc.uv_to_Luv(uv, w, L), colour.uv_to_Luv(uv, xy_w, L), rtol=1e-10, atol=1e-10
+        )
+    np.testing.assert_allclose(rc.XYZ_to_Luv(XYZ), colour.XYZ_to_Luv(XYZ), rtol=1e-12, atol=1e-11)
+    # The white itself has L* = 100 and u* = v* = 0.
+    np.testing.assert_allclose(rc.XYZ_to_Luv(D50, D50), [100.0, 0.0, 0.0], atol=1e-12)
+
+
+def test_Luv_roundtrips_and_LCHuv_matches_colour():
+    Luv = np.asarray(rc.XYZ_to_Luv(XYZ, D50))
+    np.testing.assert_allclose(rc.Luv_to_XYZ(Luv, D50), XYZ, rtol=1e-11, atol=1e-15)
+    LCHuv = rc.Luv_to_LCHuv(Luv)
+    np.testing.assert_allclose(LCHuv, colour.Luv_to_LCHuv(Luv), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(rc.LCHuv_to_Luv(LCHuv), Luv, rtol=1e-12, atol=1e-11)
+    np.testing.assert_allclose(
+        rc.LCHuv_to_Luv(LCHuv), colour.LCHuv_to_Luv(np.asarray(LCHuv)), rtol=1e-12, atol=1e-11
+    )
+    uv = rc.Luv_to_uv(Luv, D50)
+    np.testing.assert_allclose(uv, rc.XYZ_to_Luv_uv(XYZ), rtol=1e-11)
+    np.testing.assert_allclose(rc.uv_to_Luv(uv, D50, Luv[:, 0]), Luv, rtol=1e-10, atol=1e-9)
+    # One white per colour.
+    whites = np.where(np.arange(7)[:, None] % 2 == 0, D50, D65)  # (7, 3)
+    out = rc.XYZ_to_Luv(XYZ[:7], whites)
+    np.testing.assert_allclose(out[::2], Luv[:7:2], rtol=1e-13)
+    np.testing.assert_allclose(rc.Luv_to_XYZ(out, whites), XYZ[:7], rtol=1e-11)
+
+
+def test_Luv_black_is_finite_with_finite_gradients():
+    np.testing.assert_allclose(rc.XYZ_to_Luv(np.zeros(3)), 0.0)
+    np.testing.assert_allclose(rc.Luv_to_XYZ(np.zeros(3)), 0.0)
+    np.testing.assert_allclose(rc.Luv_to_uv(np.zeros(3)), 0.0)
+    for f, x in [
+        (rc.XYZ_to_Luv, jnp.zeros(3)),
+        (rc.Luv_to_XYZ, jnp.zeros(3)),
+        (rc.Luv_to_LCHuv, jnp.array([50.0, 0.0, 0.0])),
+    ]:
+        assert np.all(np.isfinite(jax.jacfwd(f)(x))), f.__name__
+        assert np.all(np.isfinite(jax.jacrev(f)(x))), f.__name__
+
+
+def test_Luv_grads_jit_vmap():
+    x = jnp.array([0.3, 0.4, 0.5])
+    luv = jnp.array([60.0, 20.0, -30.0])
+    batch = jnp.asarray(XYZ[:8])
+    for f, arg in [
+        (rc.XYZ_to_Luv, x),
+        (rc.Luv_to_XYZ, luv),
+        (rc.Luv_to_LCHuv, luv),
+        (rc.LCHuv_to_Luv, jnp.array([60.0, 25.0, 200.0])),
+        (rc.Luv_to_uv, luv),
+    ]:
+        check_grads(f, (arg,), order=1, modes="rev")
+        inputs = batch if f is rc.XYZ_to_Luv else rc.XYZ_to_Luv(batch)
+        np.testing.assert_allclose(jax.jit(f)(inputs), f(inputs), rtol=1e-13)
+        np.testing.assert_allclose(jax.vmap(f)(inputs), f(inputs), rtol=1e-13)
+    with pytest.raises((ValueError, TypeError), match="Luv"):
+        rc.Luv_to_XYZ(np.ones(2))

@@ -183,3 +183,107 @@ def test_sd_to_XYZ_under_eqx_filter_jit():
     f = eqx.filter_jit(rc.sd_to_XYZ)
     R = jnp.ones(WL5.size)
     np.testing.assert_allclose(f(R, WL5), rc.sd_to_XYZ(R, WL5), rtol=1e-14)
+
+
+# --- CIE 1931 RGB (thesis eq. 2.6-2.10) ------------------------------------------------------
+
+WL_RGB = np.arange(380.0, 781.0, 5.0)  # the grid of the Wright & Guild table: no interpolation
+
+
+def _colour_sd_to_CIE_RGB(R, wl, illuminant, k):
+    """colour's "Integration" with the Wright & Guild r̄ḡb̄ as CMFs and an explicit k."""
+    shape = colour.SpectralShape(wl[0], wl[-1], wl[1] - wl[0])
+    cmfs = colour.MSDS_CMFS["Wright & Guild 1931 2 Degree RGB CMFs"]
+    ill = (
+        colour.sd_ones(shape) if illuminant is None else colour.SpectralDistribution(illuminant, wl)
+    )
+    # colour divides by 100 when k is given.
+    return colour.colorimetry.sd_to_XYZ_integration(R, cmfs, ill, k=k, shape=shape) * 100.0
+
+
+def test_sd_to_CIE_RGB_matches_colour():
+    # colour-science's Wright & Guild 1931 2 degree RGB CMFs (Broadbent 2009, via CVRL): the
+    # same table that radiometria packages, used through colour's own integration code.
+    rng = np.random.default_rng(6)
+    L = rng.uniform(0, 0.01, (5, WL_RGB.size))  # W sr^-1 m^-2 nm^-1
+    np.testing.assert_allclose(
+        rc.sd_to_CIE_RGB(L, WL_RGB), _colour_sd_to_CIE_RGB(L, WL_RGB, None, K_M), rtol=1e-12
+    )
+    # Reflective: normalised by the luminance of the illuminant, Y_RGB = R + 4.5907 G + 0.0601 B.
+    R = rng.uniform(0, 1, (5, WL_RGB.size))
+    S = np.asarray(rc.daylight_spd(5003.0, jnp.asarray(WL_RGB)))
+    rgb_bar = colour.MSDS_CMFS["Wright & Guild 1931 2 Degree RGB CMFs"].values
+    k = 1.0 / np.sum(S * (rgb_bar @ [1.0, 4.5907, 0.0601]) * 5.0)
+    np.testing.assert_allclose(
+        rc.sd_to_CIE_RGB(R, WL_RGB, illuminant=S),
+        _colour_sd_to_CIE_RGB(R, WL_RGB, S, k),
+        rtol=1e-12,
+    )
+
+
+def test_sd_to_CIE_RGB_agrees_with_sd_to_XYZ_through_eq_2_11():
+    # Eq. 2.11 maps the RGB tristimulus values onto XYZ; the two CIE tabulations agree to
+    # about 1e-3 of their peaks, so broadband spectra agree to about that relative accuracy.
+    wl = WL_RGB
+    spectra = np.stack(
+        [
+            np.asarray(rc.get_illuminant("D65")(jnp.asarray(wl))) * 1e-3,
+            np.asarray(rc.get_illuminant("A")(jnp.asarray(wl))) * 1e-3,
+            1e-3 * (1.0 + np.sin(wl / 30.0)),
+        ]
+    )
+    rgb = rc.sd_to_CIE_RGB(spectra, wl)
+    XYZ = rc.sd_to_XYZ(spectra, wl)
+    np.testing.assert_allclose(rc.CIE_RGB_to_XYZ(rgb), XYZ, rtol=2e-3)
+    # Eq. 2.10: the luminance of R, G, B is the Y of the same spectrum, in cd m^-2.
+    np.testing.assert_allclose(rc.CIE_RGB_luminance(rgb), XYZ[:, 1], rtol=1e-3)
+    np.testing.assert_allclose(rc.CIE_RGB_luminance(rgb), rc.CIE_RGB_to_XYZ(rgb)[:, 1], rtol=1e-14)
+    # A perfect reflector has luminance factor exactly 1.
+    for ill in ("D65", "A"):
+        white = rc.sd_to_CIE_RGB(np.ones(wl.size), wl, illuminant=ill)
+        assert float(rc.CIE_RGB_luminance(white)) == pytest.approx(1.0, abs=1e-14)
+
+
+def test_CIE_RGB_luminance_thesis_eq_2_10():
+    np.testing.assert_allclose(rc.CIE_RGB_luminance(np.eye(3)), [1.0, 4.5907, 0.0601])
+    # The equal-energy spectrum E has R = G = B in the CIE 1931 RGB system (its white point),
+    # so its luminance is (1 + 4.5907 + 0.0601) R.
+    rgb = rc.sd_to_CIE_RGB(np.ones(WL_RGB.size), WL_RGB)
+    np.testing.assert_allclose(rgb / rgb[0], 1.0, rtol=5e-4)
+    # ValueError from the library, or jaxtyping's TypeCheckError (a TypeError) under pytest.
+    with pytest.raises((ValueError, TypeError), match="RGB"):
+        rc.CIE_RGB_luminance(np.ones(2))
+
+
+def test_sd_to_CIE_RGB_spectral_colours_have_negative_lobes():
+    # A narrow band at 500 nm lies outside the triangle of the 1931 primaries: R < 0.
+    L = np.exp(-0.5 * ((WL_RGB - 500.0) / 5.0) ** 2)
+    R, G, B = np.asarray(rc.sd_to_CIE_RGB(L, WL_RGB))
+    assert R < 0 < G and B > 0
+
+
+def test_sd_to_CIE_RGB_jit_vmap_grad_batched_illuminant():
+    rng = np.random.default_rng(7)
+    R = jnp.asarray(rng.uniform(size=(2, WL_RGB.size)))
+    S = jnp.asarray(rng.uniform(0.5, 1.5, size=(2, WL_RGB.size)))
+    eager = rc.sd_to_CIE_RGB(R, WL_RGB, illuminant=S)
+    loop = np.stack([rc.sd_to_CIE_RGB(R[i], WL_RGB, illuminant=S[i]) for i in range(2)])
+    np.testing.assert_allclose(eager, loop, rtol=1e-13)
+    np.testing.assert_allclose(
+        jax.jit(lambda r, s: rc.sd_to_CIE_RGB(r, WL_RGB, s))(R, S), eager, rtol=1e-14
+    )
+    np.testing.assert_allclose(
+        jax.vmap(lambda r, s: rc.sd_to_CIE_RGB(r, WL_RGB, s))(R, S), eager, rtol=1e-14
+    )
+    # Linear in the spectrum: the Jacobian is the weight matrix; a finite-difference check in
+    # the illuminant, where the normalisation makes it non-linear.
+    J = jax.jacrev(lambda r: rc.sd_to_CIE_RGB(r, WL_RGB))(R[0])
+    np.testing.assert_allclose(J, rc.sd_to_CIE_RGB(np.eye(WL_RGB.size), WL_RGB).T, rtol=1e-14)
+    check_grads(lambda s: rc.sd_to_CIE_RGB(R[0], WL_RGB, s), (S[0],), order=1, modes="rev")
+
+
+def test_sd_to_XYZ_points_rgb_observer_to_sd_to_CIE_RGB():
+    with pytest.raises(ValueError, match="sd_to_CIE_RGB"):
+        rc.sd_to_XYZ(np.ones(WL5.size), WL5, observer="CIE 1931 RGB")
+    with pytest.raises(ValueError, match="values"):
+        rc.sd_to_CIE_RGB(np.ones(10), WL_RGB)

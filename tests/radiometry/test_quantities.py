@@ -26,6 +26,8 @@ from radiometria.radiometry import (
     radiance_from_basic_radiance,
     radiance_from_exitance,
     radiance_from_irradiance,
+    radiant_energy,
+    radiosity,
     spectral_density_per_hz_to_per_nm,
     spectral_density_per_nm_to_per_hz,
     wavelength_to_frequency,
@@ -205,3 +207,93 @@ def test_radiometric_quantities_reject_integer_arrays():
         irradiance_from_radiance(np.array([1, 2]))
     with pytest.raises(TypeError, match="wavelength_nm"):
         photon_energy(np.array([500, 600]))
+
+
+# --- Table 1.2: radiant energy and radiosity ---------------------------------------------------
+
+
+def test_radiant_energy_constant_flux_and_samples():
+    # Q_e = Phi_e Delta t for a constant flux; the trapezoid rule over samples is exact for a
+    # flux linear in time.
+    np.testing.assert_allclose(radiant_energy(2.5, duration_s=4.0), 10.0)
+    flux = np.array([[1.0, 2.0], [3.0, 4.0]])
+    np.testing.assert_allclose(
+        radiant_energy(flux, duration_s=np.array([2.0, 0.5])), flux * [2.0, 0.5]
+    )
+    t = np.array([0.0, 0.5, 2.0, 3.0])  # irregular times [s]
+    np.testing.assert_allclose(radiant_energy(1.0 + 2.0 * t, t), 3.0 + 9.0, rtol=1e-15)
+    np.testing.assert_allclose(
+        radiant_energy(np.full(4, 7.0), t), radiant_energy(7.0, duration_s=3.0)
+    )
+    # Euler-Maclaurin: the trapezoid error for int_0^1 t^3 dt = 1/4 is exactly h^2 (f'(1) - f'(0))
+    # / 12 = h^2 / 4 (order 2).
+    for n in (11, 41):
+        ts = np.linspace(0.0, 1.0, n)
+        h = 1.0 / (n - 1)
+        np.testing.assert_allclose(radiant_energy(ts**3, ts) - 0.25, h**2 / 4.0, rtol=1e-9)
+    ts = np.linspace(0.0, 2.0, 101)
+    series = np.exp(-ts) * 3.0
+    np.testing.assert_allclose(
+        radiant_energy(series, ts), integrate.trapezoid(series, ts), rtol=1e-14
+    )
+    # The time axis may be any axis; other axes are batch (e.g. spectral) axes.
+    batch = np.stack([series, 2.0 * series], axis=0)  # (2, n)
+    np.testing.assert_allclose(
+        radiant_energy(batch.T, ts, axis=0), radiant_energy(batch, ts), rtol=1e-15
+    )
+
+
+def test_radiant_energy_rejects_bad_input():
+    with pytest.raises(ValueError, match="exactly one"):
+        radiant_energy(1.0)
+    with pytest.raises(ValueError, match="exactly one"):
+        radiant_energy(np.ones(3), np.arange(3.0), duration_s=1.0)
+    with pytest.raises(ValueError, match="time_s"):
+        radiant_energy(np.ones(3), np.arange(4.0))
+    with pytest.raises(ValueError, match="time_s"):
+        radiant_energy(np.ones(1), np.zeros(1))
+    with pytest.raises(eqx.EquinoxRuntimeError, match="time_s"):
+        radiant_energy(np.ones(3), np.array([0.0, 2.0, 1.0]))
+    with pytest.raises(eqx.EquinoxRuntimeError, match="duration_s"):
+        eqx.filter_jit(radiant_energy)(jnp.ones(2), duration_s=jnp.asarray(-1.0))
+
+
+def test_radiosity_sums_exitances():
+    # J_e = M_e + M_r + M_t; a Lambertian reflector of albedo rho under E reflects rho E.
+    np.testing.assert_allclose(radiosity(3.0), 3.0)
+    rho, E = np.array([0.2, 0.5, 0.9]), 100.0
+    J = radiosity(np.zeros(3), rho * E, 1.0)
+    np.testing.assert_allclose(J, rho * E + 1.0)
+    # With spectral densities the radiosity integrates like any other flux density.
+    wl = np.linspace(400.0, 700.0, 31)
+    M = np.linspace(0.1, 0.3, 31)
+    np.testing.assert_allclose(
+        integrate.trapezoid(np.asarray(radiosity(M, 0.5 * M)), wl), 1.5 * integrate.trapezoid(M, wl)
+    )
+    with pytest.raises(eqx.EquinoxRuntimeError, match="reflected_exitance"):
+        radiosity(1.0, -0.5)
+    with pytest.raises(ValueError, match="broadcast"):
+        radiosity(np.ones(3), np.ones(2))
+
+
+def test_radiant_energy_radiosity_jit_vmap_grad():
+    ts = jnp.linspace(0.0, 1.0, 5)
+    f = jnp.array([1.0, 2.0, 0.5, 3.0, 1.0])
+    np.testing.assert_allclose(jax.jit(radiant_energy)(f, ts), radiant_energy(f, ts), rtol=1e-15)
+    batch = jnp.stack([f, 2.0 * f])
+    np.testing.assert_allclose(
+        jax.vmap(radiant_energy, in_axes=(0, None))(batch, ts), radiant_energy(batch, ts)
+    )
+    # dQ/dPhi_i are the trapezoid weights; dQ/d(duration) = Phi.
+    np.testing.assert_allclose(
+        jax.grad(radiant_energy)(f, ts), [0.125, 0.25, 0.25, 0.25, 0.125], rtol=1e-15
+    )
+    check_grads(lambda f: radiant_energy(f, ts), (f,), order=1, modes="rev")
+    np.testing.assert_allclose(
+        jax.grad(lambda d: radiant_energy(2.5, duration_s=d))(1.0), 2.5, rtol=1e-15
+    )
+    g = jax.grad(lambda m: radiosity(m, 2.0 * m, 1.0))(jnp.asarray(0.3))
+    np.testing.assert_allclose(g, 3.0)
+    np.testing.assert_allclose(
+        jax.jit(jax.vmap(radiosity))(jnp.ones(3), jnp.ones(3), jnp.ones(3)), 3.0 * np.ones(3)
+    )
