@@ -2,10 +2,13 @@
 
 - `_directions`: reflect / refract (thesis eq. 3.7-3.12), shading frames, spherical coordinates;
 - `_fresnel`: Fresnel equations for dielectrics and conductors (eq. 3.13-3.18), Schlick;
-- `_ior`: spectral indices of refraction (Sellmeier glasses and water, tabulated Au/Ag/Cu/Al);
+- `_ior`: spectral indices of refraction (Sellmeier glasses and water, tabulated Au/Ag/Cu/Al),
+  the relative complex index of two absorbing media (footnote 18);
 - `_microfacet`: the Trowbridge-Reitz (GGX) distribution with visible-normal sampling;
-- `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, smooth and
-  rough conductor and dielectric, two-sided wrapper;
+- `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, diffuse
+  transmission, retroreflection, smooth and rough conductor and dielectric, two-sided wrapper;
+- `_properties`: absorptance from eq. 3.2, the flux-weighted -ances of table 3.1, slab and
+  thick-layer properties and the -ivities of the glossary;
 - `_reflectance`: the reflectance quantities of table 3.2 by Monte Carlo.
 
 Conventions: the normal points out of the surface; in the local shading frame it is +z; all
@@ -18,7 +21,9 @@ from ._bxdfs import (
     ConductorBxDF as ConductorBxDF,
     DielectricBxDF as DielectricBxDF,
     DiffuseBxDF as DiffuseBxDF,
+    DiffuseTransmissionBxDF as DiffuseTransmissionBxDF,
     OrenNayarBxDF as OrenNayarBxDF,
+    RetroreflectiveBxDF as RetroreflectiveBxDF,
     RoughConductorBxDF as RoughConductorBxDF,
     RoughDielectricBxDF as RoughDielectricBxDF,
     TwoSidedBxDF as TwoSidedBxDF,
@@ -64,19 +69,33 @@ from ._ior import (
     conductor_ior as conductor_ior,
     dielectric_ior as dielectric_ior,
     get_conductor as get_conductor,
+    relative_complex_ior as relative_complex_ior,
     sellmeier as sellmeier,
 )
 from ._microfacet import (
     TrowbridgeReitzDistribution as TrowbridgeReitzDistribution,
     roughness_to_alpha as roughness_to_alpha,
 )
+from ._properties import (
+    absorptance as absorptance,
+    absorptivity as absorptivity,
+    flux_weighted_absorptance as flux_weighted_absorptance,
+    flux_weighted_reflectance as flux_weighted_reflectance,
+    flux_weighted_transmittance as flux_weighted_transmittance,
+    reflectivity_kubelka1931 as reflectivity_kubelka1931,
+    slab_reflectance_transmittance as slab_reflectance_transmittance,
+    transmissivity as transmissivity,
+)
 from ._reflectance import (
     Cone as Cone,
     biconical_reflectance as biconical_reflectance,
+    bidirectional_reflectance as bidirectional_reflectance,
     bihemispherical_reflectance as bihemispherical_reflectance,
+    conical_directional_reflectance as conical_directional_reflectance,
     conical_hemispherical_reflectance as conical_hemispherical_reflectance,
     directional_conical_reflectance as directional_conical_reflectance,
     directional_hemispherical_reflectance as directional_hemispherical_reflectance,
     hemispherical_conical_reflectance as hemispherical_conical_reflectance,
     hemispherical_directional_reflectance as hemispherical_directional_reflectance,
+    normalised_hemispherical_directional_reflectance as normalised_hemispherical_directional_reflectance,  # noqa: E501
 )

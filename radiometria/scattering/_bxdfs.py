@@ -58,7 +58,7 @@ from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
 from .._math import safe_div
-from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
+from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz, coordinate_system
 from ._fresnel import _check_eta, _check_k, _fr_conductor, _fr_dielectric_snell
 from ._microfacet import (
     TrowbridgeReitzDistribution,
@@ -74,7 +74,9 @@ __all__ = [
     "ConductorBxDF",
     "DielectricBxDF",
     "DiffuseBxDF",
+    "DiffuseTransmissionBxDF",
     "OrenNayarBxDF",
+    "RetroreflectiveBxDF",
     "RoughConductorBxDF",
     "RoughDielectricBxDF",
     "TwoSidedBxDF",
@@ -400,6 +402,223 @@ class OrenNayarBxDF(AbstractBxDF):
         same = wo[..., 2] * wi[..., 2] > 0
         batch = np.broadcast_shapes(wo.shape[:-1], self.reflectance.shape[:-1])
         return jnp.broadcast_to(jnp.where(same, jnp.abs(wi[..., 2]) * (1.0 / jnp.pi), 0.0), batch)
+
+
+# --------------------------------------------------------------------------------------------
+# Diffuse transmission
+
+
+class DiffuseTransmissionBxDF(AbstractBxDF):
+    r"""Lambertian reflection and Lambertian transmission (thesis section 3.1, diffuse BTDF).
+
+    $$f(\omega_o, \omega_i) = \begin{cases} R/\pi & \omega_i \text{ on the side of } \omega_o\\
+      T/\pi & \omega_i \text{ on the other side}\end{cases}$$
+
+    A thin translucent sheet (paper, a lamp shade, a leaf) that scatters uniformly into both
+    hemispheres, as pbrt-v4's `DiffuseTransmissionBxDF`. Its directional albedo is $R + T$
+    for every incident direction, from either side, so $R + T \le 1$ (checked). No refraction
+    happens, so there is no radiance factor: `mode` does not change `f`, and the BxDF is
+    reciprocal across the sheet as well, $f(\omega_o, \omega_i) = f(\omega_i, \omega_o)$.
+
+    Sampling (`Pharr2023` section 9.2): reflection with probability
+    $p_r = \max_\lambda R/(\max_\lambda R + \max_\lambda T)$, otherwise transmission, each with
+    a cosine-weighted hemisphere, so
+    $p(\omega_i) = (p_r \text{ or } 1 - p_r)|\cos\theta_i|/\pi$. A black sheet
+    ($R = T = 0$) samples transmission, with value and weight 0.
+
+    **Fields:**
+
+    - `reflectance`: $R$ in [0, 1], `(..., n_lambda)`. [dimensionless]
+    - `transmittance`: $T$ in [0, 1], `(..., n_lambda)`, with $R + T \le 1$. [dimensionless]
+
+    !!! note "Thesis"
+        Section 3.1 (diffuse reflection; transmission "analogous to the BRDF", the BTDF),
+        eq. (3.2), (3.4).
+
+    ??? cite "References"
+        `Lambert1760`; `Pharr2023` section 9.2 (`DiffuseTransmissionBxDF`, pbrt-v4).
+    """
+
+    reflectance: Array
+    transmittance: Array
+
+    def __init__(self, reflectance, transmittance):
+        r = _spectral(reflectance, "reflectance")
+        t = _spectral(transmittance, "transmittance")
+        r = check_in_range(r, "reflectance", 0.0, 1.0, unit="dimensionless")
+        t = check_in_range(t, "transmittance", 0.0, 1.0, unit="dimensionless")
+        r, t = _spectral_pair(r, t)
+        # Energy conservation, thesis eq. (3.2): absorptance = 1 - R - T >= 0.
+        t = eqx.error_if(
+            t,
+            r + t > 1.0 + 1e-12,
+            "`reflectance` + `transmittance` must be <= 1 [dimensionless] (energy "
+            "conservation, thesis eq. 3.2); got a sum > 1.",
+        )
+        self.reflectance, self.transmittance = r, t
+
+    def _p_reflect(self) -> Array:
+        """Probability of sampling reflection, `(...)` (0.5 for a black sheet)."""
+        pr = jnp.max(self.reflectance, axis=-1)
+        pt = jnp.max(self.transmittance, axis=-1)
+        return safe_div(pr, pr + pt)
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, r, t) = _broadcast(
+            (wo, 1), (wi, 1), (self.reflectance, 1), (self.transmittance, 1)
+        )
+        cc = wo[..., 2] * wi[..., 2]
+        v = jnp.where((cc > 0)[..., None], r, jnp.where((cc < 0)[..., None], t, 0.0))
+        return v * (1.0 / jnp.pi)
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, u_lobe, u2, r, t, pr) = _broadcast(
+            (wo, 1),
+            (u_lobe, 0),
+            (u2, 1),
+            (self.reflectance, 1),
+            (self.transmittance, 1),
+            (self._p_reflect(), 0),
+        )
+        x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
+        reflect = u_lobe < pr
+        # Reflection: wo's hemisphere; transmission: the other one.
+        flip = (wo[..., 2] < 0) == reflect
+        z = jnp.where(flip, -z, z)
+        p_lobe = jnp.where(reflect, pr, 1.0 - pr)
+        ok = (wo[..., 2] != 0) & (z != 0) & (p_lobe > 0)
+        s = BSDFSample(
+            f=jnp.where(reflect[..., None], r, t) * (1.0 / jnp.pi),
+            wi=_stack3(x, y, z),
+            pdf=p_lobe * jnp.abs(z) * (1.0 / jnp.pi),
+            is_delta=jnp.zeros(z.shape, bool),
+            is_transmission=~reflect,
+            eta=jnp.ones_like(z),
+            terminate_secondary=jnp.zeros(z.shape, bool),
+        )
+        return _failed_or(ok, s)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, pr) = _broadcast((wo, 1), (wi, 1), (self._p_reflect(), 0))
+        cc = wo[..., 2] * wi[..., 2]
+        p_lobe = jnp.where(cc > 0, pr, jnp.where(cc < 0, 1.0 - pr, 0.0))
+        return p_lobe * jnp.abs(wi[..., 2]) * (1.0 / jnp.pi)
+
+
+# --------------------------------------------------------------------------------------------
+# Retroreflection
+
+
+def _power(c: Array, n: Array) -> Array:
+    """c**n for c in (0, 1], n >= 0, with finite gradients; 0 where c <= 0."""
+    pos = c > 0
+    return jnp.where(pos, jnp.exp(n * jnp.log(jnp.where(pos, c, 1.0))), 0.0)
+
+
+class RetroreflectiveBxDF(AbstractBxDF):
+    r"""Retroreflection: a normalised cosine-power lobe around the direction of incidence.
+
+    $$f(\omega_o, \omega_i) = R\,\frac{n + 2}{2\pi}\,\max(0, \omega_o\cdot\omega_i)^n
+      \quad(\omega_i, \omega_o \text{ on the same side})$$
+
+    With both directions pointing away from the surface, $\omega_i = \omega_o$ is the
+    retroreflection (back towards the source): this is the Lafortune lobe
+    $(C_x u_x v_x + C_y u_y v_y + C_z u_z v_z)^n$ with $C_x = C_y = C_z = 1$, the retroreflective
+    case of `Lafortune1997` (the mirror lobe has $C_x = C_y = -1$), with the energy-conserving
+    normalisation $(n + 2)/(2\pi)$ of the modified Phong model (`Lafortune1994`). It is
+    reciprocal ($\omega_o\cdot\omega_i$ is symmetric). Its directional albedo is exactly $R$ at
+    normal incidence and below $R$ elsewhere (the lobe is cut by the horizon and tilted away
+    from the normal; for a narrow lobe it tends to $R\cos\theta_o$), so it conserves energy
+    for every $R \le 1$. The exponent $n$ sets the width of the lobe (larger is narrower).
+
+    Sampling draws $\omega_i$ from the lobe itself, $p(\omega_i) = \frac{n+1}{2\pi}
+    (\omega_o\cdot\omega_i)^n$ over the half-space $\omega_o\cdot\omega_i > 0$ (`Lafortune1994`,
+    on the concentric disk mapping); a direction below the horizon is a failed sample
+    (`pdf = 0`), so `pdf` integrates to 1 minus the failure probability (1 at normal
+    incidence), as for the microfacet BxDFs.
+
+    **Fields:**
+
+    - `reflectance`: $R$ in [0, 1], `(..., n_lambda)`. [dimensionless]
+    - `exponent`: lobe exponent $n \ge 0$, `(...)`. [dimensionless]
+
+    !!! note "Thesis"
+        Section 3.1 ("Retroreflective Material"), eq. (3.4).
+
+    ??? cite "References"
+        `Lafortune1997`; `Lafortune1994`; `Pharr2023` section 9.1.
+    """
+
+    reflectance: Array
+    exponent: Array
+
+    def __init__(self, reflectance, exponent):
+        r = _spectral(reflectance, "reflectance")
+        self.reflectance = check_in_range(r, "reflectance", 0.0, 1.0, unit="dimensionless")
+        n = as_float_array(exponent, "exponent")
+        self.exponent = check_in_range(n, "exponent", 0.0, np.inf, unit="dimensionless")
+
+    @staticmethod
+    def _lobe(wo: Array, wi: Array, n: Array) -> tuple[Array, Array]:
+        """(c^n, ok): the lobe value and where the pair lies in the lobe, same side."""
+        c = jnp.sum(wo * wi, axis=-1)
+        ok = (wo[..., 2] * wi[..., 2] > 0) & (c > 0)
+        return jnp.where(ok, _power(c, n), 0.0), ok
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, r, n) = _broadcast((wo, 1), (wi, 1), (self.reflectance, 1), (self.exponent, 0))
+        cn, _ = self._lobe(wo, wi, n)
+        return (cn * (n + 2.0) * (0.5 / jnp.pi))[..., None] * r
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        _, (wo, wi, n) = _broadcast((wo, 1), (wi, 1), (self.exponent, 0))
+        batch = np.broadcast_shapes(wo.shape[:-1], self.reflectance.shape[:-1])
+        cn, _ = self._lobe(wo, wi, n)
+        return jnp.broadcast_to(cn * (n + 1.0) * (0.5 / jnp.pi), batch)
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        _, (wo, _u, u2, r, n) = _broadcast(
+            (wo, 1), (u_lobe, 0), (u2, 1), (self.reflectance, 1), (self.exponent, 0)
+        )
+        # Concentric disk point (dx, dy) with rho^2 uniform in [0, 1]: the power-cosine lobe's
+        # inversion is cos(alpha) = (1 - rho^2)^(1/(n+1)), and (dx, dy)/rho a uniform azimuth.
+        dx, dy = _sample_disk_concentric(u2[..., 0], u2[..., 1])
+        rho2 = dx * dx + dy * dy
+        log_c = jnp.log1p(-jnp.minimum(rho2, 1.0)) / (n + 1.0)
+        cos_a = jnp.exp(log_c)
+        sin2_a = -jnp.expm1(2.0 * log_c)
+        # sin(alpha)/rho -> sqrt(2/(n+1)) as rho -> 0.
+        pos = rho2 > 0
+        scale = jnp.where(
+            pos, _sqrt_clamped(sin2_a / jnp.where(pos, rho2, 1.0)), jnp.sqrt(2.0 / (n + 1.0))
+        )
+        s, t = coordinate_system(wo)
+        wi = (dx * scale)[..., None] * s + (dy * scale)[..., None] * t + cos_a[..., None] * wo
+        cn, ok = self._lobe(wo, wi, n)
+        s_ = BSDFSample(
+            f=(cn * (n + 2.0) * (0.5 / jnp.pi))[..., None] * r,
+            wi=wi,
+            pdf=cn * (n + 1.0) * (0.5 / jnp.pi),
+            is_delta=jnp.zeros(ok.shape, bool),
+            is_transmission=jnp.zeros(ok.shape, bool),
+            eta=jnp.ones(ok.shape, wi.dtype),
+            terminate_secondary=jnp.zeros(ok.shape, bool),
+        )
+        return _failed_or(ok, s_)
 
 
 # --------------------------------------------------------------------------------------------

@@ -47,7 +47,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from .._checks import as_float_array, check_choice, check_positive, lookup
+from .._checks import as_float_array, check_broadcastable, check_choice, check_positive, lookup
+from .._math import align_ranks
 
 __all__ = [
     "CONDUCTORS",
@@ -56,6 +57,7 @@ __all__ = [
     "conductor_ior",
     "dielectric_ior",
     "get_conductor",
+    "relative_complex_ior",
     "sellmeier",
 ]
 
@@ -221,3 +223,47 @@ def conductor_ior(name: str, wavelength_nm) -> tuple[Array, Array]:
         Eq. (3.13)-(3.18) take these as $\\eta$, $\\kappa$ (footnote 18).
     """
     return get_conductor(name)(wavelength_nm)
+
+
+def relative_complex_ior(eta_i, k_i, eta_t, k_t) -> tuple[Array, Array]:
+    r"""Relative complex index of refraction $\eta + i\kappa$ of two absorbing media.
+
+    $$\eta + i\kappa = \frac{\eta_t + i\kappa_t}{\eta_i + i\kappa_i},\qquad
+      \eta = \frac{\eta_i\eta_t + \kappa_i\kappa_t}{\eta_i^2 + \kappa_i^2},\qquad
+      \kappa = \frac{\eta_i\kappa_t - \eta_t\kappa_i}{\eta_i^2 + \kappa_i^2}$$
+
+    The index of the transmitting side (t, e.g. a metal) relative to the incident side (i, e.g.
+    a glass or an absorbing liquid), as the Fresnel equations (thesis eq. 3.13-3.18) take it:
+    feed the result to `fresnel_conductor(cos_theta_i, eta, k)`. With vacuum on the incident
+    side ($\eta_i = 1$, $\kappa_i = 0$) it returns $(\eta_t, \kappa_t)$ unchanged. The relative
+    $\kappa$ is negative when the incident medium absorbs more, relative to its index, than the
+    transmitting one ($\kappa_i/\eta_i > \kappa_t/\eta_t$); `fresnel_conductor` accepts only
+    $\kappa \ge 0$.
+
+    **Arguments:**
+
+    - `eta_i`, `k_i`: refractive index (> 0) and extinction coefficient (>= 0) of the incident
+        medium, e.g. `(..., n_lambda)`. [dimensionless]
+    - `eta_t`, `k_t`: the same for the transmitting medium. [dimensionless]
+
+    **Returns:**
+
+    `(eta, k)`, broadcast over the inputs. [dimensionless]
+
+    !!! note "Thesis"
+        Footnote 18 and the definitions of $\eta$, $\kappa$ under eq. (3.17), section 3.1.1.
+
+    ??? cite "References"
+        `Born1999` section 14.2; `Pegoraro2016` section 6.2.
+    """
+    eta_i = check_positive(as_float_array(eta_i, "eta_i"), "eta_i", "dimensionless")
+    eta_t = check_positive(as_float_array(eta_t, "eta_t"), "eta_t", "dimensionless")
+    k_i = as_float_array(k_i, "k_i")
+    k_t = as_float_array(k_t, "k_t")
+    k_i = eqx.error_if(k_i, k_i < 0, "`k_i` (extinction coefficient) must be >= 0; got < 0.")
+    k_t = eqx.error_if(k_t, k_t < 0, "`k_t` (extinction coefficient) must be >= 0; got < 0.")
+    check_broadcastable(("eta_i", eta_i), ("k_i", k_i), ("eta_t", eta_t), ("k_t", k_t))
+    eta_i, k_i, eta_t, k_t = align_ranks(eta_i, k_i, eta_t, k_t)
+    # (eta_t + i k_t)(eta_i - i k_i) / |eta_i + i k_i|^2, in real arithmetic.
+    inv = 1.0 / (eta_i * eta_i + k_i * k_i)
+    return (eta_i * eta_t + k_i * k_t) * inv, (eta_i * k_t - eta_t * k_i) * inv

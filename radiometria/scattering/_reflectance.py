@@ -5,9 +5,12 @@ for a given geometry of incidence and collection (`Nicodemus1977`, thesis table 
 
 | function | incident | collected | thesis |
 |---|---|---|---|
+| `bidirectional_reflectance(bxdf, wo, wi)` | direction | $d\omega_o$ | table 3.2 |
 | `directional_hemispherical_reflectance(bxdf, wi)` | direction | hemisphere | table 3.2 |
 | `hemispherical_directional_reflectance(bxdf, wo)` | hemisphere | direction | eq. 3.5 |
+| `normalised_hemispherical_directional_reflectance(bxdf, wo)` | hemisphere | $d\omega_o$ | 3.2 |
 | `directional_conical_reflectance(bxdf, wi, cone)` | direction | cone $\Omega$ | table 3.2 |
+| `conical_directional_reflectance(bxdf, cone, wo)` | cone $\Omega$ | $d\omega_o$ | table 3.2 |
 | `conical_hemispherical_reflectance(bxdf, cone)` | cone | hemisphere | table 3.2 |
 | `hemispherical_conical_reflectance(bxdf, cone)` | hemisphere | cone | table 3.2 |
 | `biconical_reflectance(bxdf, cone_i, cone_o)` | cone | cone | table 3.2 |
@@ -27,6 +30,11 @@ hemisphere).
 "Hemispherical-directional reflectance" here is the thesis's eq. (3.5), which the thesis calls
 the albedo, $\rho(\omega_o) = \int f(\omega_o,\omega_i)|\cos\theta_i|\,d\omega_i$; the
 differential form of table 3.2 is this times $|\cos\theta_o|\,d\omega_o/\pi$.
+
+The three "$d\omega_o$" rows are Nicodemus' differential reflectances $d\rho/d\omega_o$ into an
+element of solid angle around `wo` (units sr^-1): the integrands of hemispherical or conical
+collection. Divided by $|\cos\theta_o|/\pi$ (the value for the perfect white Lambertian
+reflector) they become reflectance *factors*, equal to $R$ for a Lambertian surface.
 
 Geometry: the local shading frame (normal +z); the hemisphere is the one of the given direction
 (`wi` / `wo`), or the upper one (+z) when the incidence is hemispherical or conical. Only
@@ -48,6 +56,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from .._checks import as_float_array, check_positive_int
+from .._math import align_ranks
 from .._types import Key
 from ..montecarlo import Estimate, estimate_mean, sample_cosine_hemisphere, sample_uniform_cone
 from ._bxdfs import AbstractBxDF
@@ -56,12 +65,15 @@ from ._directions import coordinate_system
 __all__ = [
     "Cone",
     "biconical_reflectance",
+    "bidirectional_reflectance",
     "bihemispherical_reflectance",
+    "conical_directional_reflectance",
     "conical_hemispherical_reflectance",
     "directional_conical_reflectance",
     "directional_hemispherical_reflectance",
     "hemispherical_conical_reflectance",
     "hemispherical_directional_reflectance",
+    "normalised_hemispherical_directional_reflectance",
 ]
 
 
@@ -333,3 +345,126 @@ def bihemispherical_reflectance(bxdf, **kwargs) -> Estimate:
     `(n_lambda,)`. [dimensionless]
     """
     return biconical_reflectance(bxdf, None, None, **kwargs)
+
+
+def bidirectional_reflectance(bxdf, wo, wi) -> Array:
+    r"""Bidirectional reflectance $d\rho/d\omega_o$, per unit solid angle of collection.
+
+    $$\frac{d\rho(\omega_o, \omega_i)}{d\omega_o} = f(\omega_o, \omega_i)\,|\cos\theta_o|$$
+
+    The fraction of the flux arriving from `wi` that is reflected into the solid angle
+    $d\omega_o$ around `wo`: the integrand of every other reflectance of the table, and a
+    probability density over the collecting directions (its integral over the hemisphere is
+    `directional_hemispherical_reflectance`). For a Lambertian surface it is
+    $R|\cos\theta_o|/\pi$. Exact (no sampling); a delta (specular) lobe gives 0, as its
+    BxDF is not a function.
+
+    **Arguments:**
+
+    - `bxdf`: any BxDF of this module.
+    - `wo`, `wi`: collecting and incident directions `(..., 3)`, local frame; pairs on opposite
+        sides (transmission) give 0. [unit vectors]
+
+    **Returns:**
+
+    `(..., n_lambda)`. [sr^-1]
+
+    !!! note "Thesis"
+        Table 3.2, "Bidirectional Reflectance".
+
+    ??? cite "References"
+        `Nicodemus1977`.
+    """
+    bxdf = _check_bxdf(bxdf)
+    wo = as_float_array(wo, "wo")
+    wi = as_float_array(wi, "wi")
+    f = bxdf.f(wo, wi)
+    cos_o, cos_i = align_ranks(wo[..., 2:3], wi[..., 2:3])
+    cos_o, f = align_ranks(jnp.where(cos_o * cos_i > 0, jnp.abs(cos_o), 0.0), f)
+    return f * cos_o
+
+
+def conical_directional_reflectance(
+    bxdf, cone: Cone, wo, *, n_samples: int | None = None, key: Key | None = None, u=None
+) -> Estimate:
+    r"""Conical-directional reflectance $d\rho(\Omega; \omega_o)/d\omega_o$ for uniform radiance
+    from the cone $\Omega$.
+
+    $$\frac{d\rho(\Omega; \omega_o)}{d\omega_o} = \frac{|\cos\theta_o|}{\Omega'}
+      \int_\Omega f(\omega_o, \omega_i)|\cos\theta_i|\,d\omega_i,\qquad
+      \Omega' = \int_\Omega|\cos\theta_i|\,d\omega_i$$
+
+    per unit solid angle of collection around `wo` (the thesis normalises by $\pi$ instead of
+    $\Omega'$; see the module notes). Reciprocity (`Nicodemus1977`) ties it to the
+    directional-conical reflectance: $\Omega'\,d\rho(\Omega;\omega)/d\omega =
+    |\cos\theta|\,\rho(\omega;\Omega)$ for a reciprocal BxDF. For a Lambertian surface it is
+    $R|\cos\theta_o|/\pi$ for every cone.
+
+    Estimated with the BxDF's sampling from `wo` (`mode="radiance"`), keeping the directions
+    inside the cone, so delta lobes count.
+
+    **Arguments:**
+
+    - `bxdf`: any BxDF of this module.
+    - `cone`: the incident `Cone`.
+    - `wo`: collecting direction `(..., 3)`, upper hemisphere. [unit vector]
+    - `n_samples`, `key`, `u`: as in `directional_hemispherical_reflectance` (`u` `(n, 3)`).
+
+    **Returns:**
+
+    `Estimate` with `mean` `(..., n_lambda)`. [sr^-1]
+
+    !!! note "Thesis"
+        Table 3.2, "Conical-Directional Reflectance".
+
+    ??? cite "References"
+        `Nicodemus1977`.
+    """
+    bxdf = _check_bxdf(bxdf)
+    if not isinstance(cone, Cone):
+        raise TypeError(f"`cone` must be a Cone, got {type(cone).__name__}.")
+    wo = as_float_array(wo, "wo")
+    u = _variates(n_samples, 3, key, u)
+    n = u.shape[0]
+    terms = _collect(bxdf, _expand(wo, n), _u_batch(u, wo.shape[:-1]), cone, "radiance")
+    scale = jnp.abs(wo[..., 2:3]) / cone.projected_solid_angle()
+    return estimate_mean(terms * scale[None], axis=0)
+
+
+def normalised_hemispherical_directional_reflectance(
+    bxdf, wo, *, n_samples: int | None = None, key: Key | None = None, u=None
+) -> Estimate:
+    r"""Hemispherical-directional reflectance $d\rho(\omega_o)/d\omega_o$ for uniform radiance
+    from the hemisphere, per unit solid angle of collection (Nicodemus' form).
+
+    $$\frac{d\rho(\omega_o)}{d\omega_o} = \frac{|\cos\theta_o|}{\pi}
+      \int_{\mathcal H^2} f(\omega_o, \omega_i)|\cos\theta_i|\,d\omega_i
+      = \frac{|\cos\theta_o|}{\pi}\,\rho(\omega_o)$$
+
+    with $\rho(\omega_o)$ the albedo of eq. (3.5) (`hemispherical_directional_reflectance`).
+    The fraction of uniformly incident flux reflected into $d\omega_o$; its integral over the
+    hemisphere is the bi-hemispherical reflectance (eq. 3.6). For a Lambertian surface it is
+    $R|\cos\theta_o|/\pi$, for a mirror $F_r(\cos\theta_o)|\cos\theta_o|/\pi$.
+
+    **Arguments:**
+
+    - `bxdf`: any BxDF of this module.
+    - `wo`: collecting direction `(..., 3)`, local frame. [unit vector]
+    - `n_samples`, `key`, `u`: as in `directional_hemispherical_reflectance`.
+
+    **Returns:**
+
+    `Estimate` with `mean` `(..., n_lambda)`. [sr^-1]
+
+    !!! note "Thesis"
+        Table 3.2, "Hemispherical-Directional Reflectance" (the "(alt)" form is eq. 3.5).
+
+    ??? cite "References"
+        `Nicodemus1977`.
+    """
+    bxdf = _check_bxdf(bxdf)
+    wo = as_float_array(wo, "wo")
+    u = _variates(n_samples, 3, key, u)
+    n = u.shape[0]
+    terms = _collect(bxdf, _expand(wo, n), _u_batch(u, wo.shape[:-1]), None, "radiance")
+    return estimate_mean(terms * (jnp.abs(wo[..., 2:3]) / jnp.pi)[None], axis=0)

@@ -34,7 +34,7 @@ def _sphere_integral(pdf_fn, n_z=768, n_phi=1536):
     return float(vals.sum() * (2 / n_z) * (2 * np.pi / n_phi))
 
 
-def _defective_chi2(bxdf, wo, *, key, n_tests=1, resolution=None):
+def _defective_chi2(bxdf, wo, *, key, n_tests=1, resolution=None, n_samples=N_CHI2):
     wo = jnp.asarray(wo)
 
     @jax.jit
@@ -61,7 +61,7 @@ def _defective_chi2(bxdf, wo, *, key, n_tests=1, resolution=None):
         sample,
         claimed,
         domain="sphere",
-        n_samples=N_CHI2,
+        n_samples=n_samples,
         key=key,
         u_dim=5,
         n_tests=n_tests,
@@ -167,6 +167,8 @@ NONDELTA = [
     sc.RoughDielectricBxDF(0.3, 1.5),
     sc.RoughDielectricBxDF(0.4, jnp.array([1.5, 1.5, 1.5, 1.5]), masking="separable"),
     sc.TwoSidedBxDF(sc.DiffuseBxDF(0.3), sc.OrenNayarBxDF(0.7, 0.3)),
+    sc.DiffuseTransmissionBxDF(jnp.array([0.2, 0.5, 0.1, 0.0]), jnp.array([0.7, 0.1, 0.3, 0.9])),
+    sc.RetroreflectiveBxDF(jnp.array([0.2, 0.5, 0.7, 0.9]), 20.0),
 ]
 
 
@@ -199,6 +201,8 @@ REFLECTIVE = [
     sc.RoughConductorBxDF(0.25, jnp.array([0.2, 1.2]), jnp.array([3.0, 0.5])),
     sc.RoughConductorBxDF(0.1, 0.2, 3.0, alpha_y=0.4, masking="separable"),
     sc.RoughDielectricBxDF(0.3, 1.5),
+    sc.RetroreflectiveBxDF(jnp.array([0.3, 0.9]), 7.5),
+    sc.DiffuseTransmissionBxDF(jnp.array([0.3, 0.1]), jnp.array([0.6, 0.8])),
 ]
 
 
@@ -387,7 +391,9 @@ def test_bxdf_broadcasting_shapes():
 
 @pytest.mark.parametrize(
     "bxdf",
-    NONDELTA[:5] + [sc.DielectricBxDF(1.5), sc.ConductorBxDF(0.2, 3.0)],
+    NONDELTA[:5]
+    + [sc.DielectricBxDF(1.5), sc.ConductorBxDF(0.2, 3.0)]
+    + [sc.DiffuseTransmissionBxDF(0.3, 0.6), sc.RetroreflectiveBxDF(0.8, 5.0)],
     ids=lambda b: type(b).__name__,
 )
 def test_bxdf_jit_and_vmap_match_eager(bxdf):
@@ -432,6 +438,8 @@ def test_bxdf_gradients_finite_at_edges(where):
             sc.RoughDielectricBxDF(alpha, eta),
             sc.DielectricBxDF(eta),
             sc.ConductorBxDF(eta, k),
+            sc.DiffuseTransmissionBxDF(r, 0.5 * r),
+            sc.RetroreflectiveBxDF(r, 10.0 * alpha),
         ]
         tot = 0.0
         for b in bs:
@@ -460,6 +468,10 @@ def test_bxdf_rejects_out_of_range_parameters():
         lambda: sc.RoughConductorBxDF(1.5, 0.2, 3.0),
         lambda: sc.RoughDielectricBxDF(0.3, 1.5, alpha_y=-0.1),
         lambda: sc.RoughDielectricBxDF(0.3, -1.5),
+        lambda: sc.DiffuseTransmissionBxDF(0.6, 0.5),
+        lambda: sc.DiffuseTransmissionBxDF(0.5, -0.1),
+        lambda: sc.RetroreflectiveBxDF(0.5, -1.0),
+        lambda: sc.RetroreflectiveBxDF(1.5, 2.0),
     ]
     for make in bad:
         with pytest.raises(eqx.EquinoxRuntimeError):
@@ -486,7 +498,117 @@ def test_bxdf_float32():
         ),
         sc.RoughDielectricBxDF(jnp.float32(0.3), jnp.ones(4, jnp.float32) * 1.5),
         sc.DielectricBxDF(jnp.ones(4, jnp.float32) * 1.5),
+        sc.DiffuseTransmissionBxDF(jnp.float32(0.3), jnp.ones(4, jnp.float32) * 0.5),
+        sc.RetroreflectiveBxDF(jnp.ones(4, jnp.float32) * 0.5, jnp.float32(8.0)),
     ]:
         s = b.sample_f(wo, u[:, 0], u[:, 1:])
         assert s.f.dtype == jnp.float32 and s.wi.dtype == jnp.float32 and s.pdf.dtype == jnp.float32
         assert np.all(np.isfinite(np.asarray(s.weight())))
+
+
+# --------------------------------------------------------------------------------------------
+# Diffuse transmission and retroreflection (thesis section 3.1)
+
+
+@pytest.mark.parametrize("theta", [0.4, 1.3, np.pi - 0.7])
+def test_diffuse_transmission_sampling_chi2(theta):
+    b = sc.DiffuseTransmissionBxDF(jnp.array([0.2, 0.3]), jnp.array([0.6, 0.1]))
+    res = _defective_chi2(b, _dir(theta), key=jax.random.key(21), n_tests=3, n_samples=20_000)
+    assert res.passed, res.message
+
+
+@pytest.mark.parametrize("theta,n", [(0.0, 5.0), (0.7, 20.0), (1.35, 3.0), (np.pi - 0.5, 12.0)])
+def test_retroreflective_sampling_chi2(theta, n):
+    b = sc.RetroreflectiveBxDF(0.7, n)
+    res = _defective_chi2(b, _dir(theta), key=jax.random.key(22), n_tests=4, n_samples=20_000)
+    assert res.passed, res.message
+
+
+def test_new_bxdfs_pdf_integrals():
+    # Diffuse transmission samples no failures: the pdf is a density on the sphere.
+    b = sc.DiffuseTransmissionBxDF(0.2, 0.5)
+    for theta in [0.3, np.pi - 1.2]:
+        wo = _dir(theta)
+        integral = _sphere_integral(lambda w, wo=wo: b.pdf(wo, w))
+        np.testing.assert_allclose(integral, 1.0, atol=1e-5)
+    # Retroreflection: 1 at normal incidence, less where the lobe crosses the horizon.
+    r = sc.RetroreflectiveBxDF(0.5, 8.0)
+    z = jnp.array([0.0, 0.0, 1.0])
+    np.testing.assert_allclose(_sphere_integral(lambda w: r.pdf(z, w)), 1.0, atol=2e-4)
+    grazing = _sphere_integral(lambda w: r.pdf(_dir(1.4), w))
+    assert 0.5 < grazing < 0.95
+
+
+@pytest.mark.parametrize("theta", [0.0, 0.7, 1.3, np.pi - 0.4])
+def test_diffuse_transmission_white_furnace(theta):
+    wo = _dir(theta)
+    # With R and T not depending on wavelength every sample weighs R + T exactly.
+    m, se = _albedo(sc.DiffuseTransmissionBxDF(0.35, 0.55), wo, n=1000)
+    np.testing.assert_allclose(m, 0.9, rtol=1e-12)
+    m, se = _albedo(sc.DiffuseTransmissionBxDF(0.0, 1.0), wo, n=1000)
+    np.testing.assert_allclose(m, 1.0, rtol=1e-12)
+    # Spectral R, T: the albedo per wavelength is R + T (one lobe chosen per sample).
+    b = sc.DiffuseTransmissionBxDF(jnp.array([0.1, 0.6]), jnp.array([0.8, 0.2]))
+    m, se = _albedo(b, wo, n=100_000)
+    assert np.all(np.abs(m - np.array([0.9, 0.8])) <= 6 * se)
+
+    # Reflection and transmission separately, by quadrature over the sphere.
+    def part(sign):
+        def g(w):
+            side = sign * w[:, 2] * wo[2] > 0
+            return jnp.where(side, b.f(wo, w)[:, 1] * jnp.abs(w[:, 2]), 0.0)
+
+        return _sphere_integral(g)
+
+    r_part, t_part = part(1.0), part(-1.0)
+    np.testing.assert_allclose([r_part, t_part], [0.6, 0.2], rtol=1e-5)
+
+
+def test_diffuse_transmission_values_and_sides():
+    b = sc.DiffuseTransmissionBxDF(jnp.array([0.25, 0.0]), jnp.array([0.5, 0.75]))
+    wo = _random_dirs(jax.random.key(23), 200)
+    wi = _random_dirs(jax.random.key(24), 200)
+    same = np.asarray(wo[:, 2] * wi[:, 2] > 0)[:, None]
+    expect = np.where(same, [0.25, 0.0], [0.5, 0.75]) / np.pi
+    np.testing.assert_allclose(b.f(wo, wi), expect, rtol=1e-14)
+    # Reciprocal across the sheet too, and the same in both transport modes.
+    np.testing.assert_allclose(b.f(wi, wo), b.f(wo, wi), rtol=1e-14)
+    np.testing.assert_allclose(b.f(wo, wi, mode="importance"), b.f(wo, wi), rtol=1e-14)
+    s = b.sample_f(wo, jax.random.uniform(jax.random.key(25), (200,)), jnp.full((200, 2), 0.3))
+    crossed = np.asarray(s.wi[:, 2] * wo[:, 2] < 0)
+    np.testing.assert_array_equal(np.asarray(s.is_transmission), crossed)
+    # p_r = max R / (max R + max T) = 0.25 / 1.0; T = 0 samples only reflection.
+    p_lobe = np.where(same[:, 0], 0.25, 0.75)
+    np.testing.assert_allclose(b.pdf(wo, wi), p_lobe * np.abs(wi[:, 2]) / np.pi, rtol=1e-14)
+    only_r = sc.DiffuseTransmissionBxDF(0.5, 0.0)
+    s = only_r.sample_f(wo, jnp.full((200,), 0.99), jnp.full((200, 2), 0.3))
+    assert not bool(jnp.any(s.is_transmission)) and bool(jnp.all(s.pdf > 0))
+    np.testing.assert_allclose(only_r.f(wo, wi), sc.DiffuseBxDF(0.5).f(wo, wi), rtol=1e-14)
+
+
+def test_retroreflective_lobe_and_energy():
+    b = sc.RetroreflectiveBxDF(jnp.array([0.4, 1.0]), 10.0)
+    # Peak back towards the source, falling off away from it.
+    for theta in [0.2, 0.9]:
+        wo = _dir(theta)
+        f_back = b.f(wo, wo)
+        np.testing.assert_allclose(f_back, jnp.array([0.4, 1.0]) * 12 / (2 * np.pi), rtol=1e-14)
+        mirror = wo * jnp.array([-1.0, -1.0, 1.0])
+        # The mirror direction lies 2 theta away from wo: cos(2 theta)^n of the peak, or 0.
+        lobe = max(np.cos(2 * theta), 0.0) ** 10
+        np.testing.assert_allclose(b.f(wo, mirror), f_back * lobe, rtol=1e-12, atol=1e-300)
+        assert float(b.f(wo, _dir(theta + 0.1))[1]) < float(f_back[1])
+    # White furnace by quadrature: albedo R at normal incidence, below R elsewhere.
+    albedo = []
+    for theta in [0.0, 0.5, 1.0, 1.5]:
+        wo = _dir(theta)
+        albedo.append(_sphere_integral(lambda w, wo=wo: b.f(wo, w)[:, 1] * jnp.abs(w[:, 2])))
+    np.testing.assert_allclose(albedo[0], 1.0, atol=2e-4)
+    assert np.all(np.diff(albedo) < 0) and albedo[-1] > 0.1
+    # Sampled estimate agrees with the quadrature.
+    m, se = _albedo(b, _dir(1.0), n=50_000)
+    assert abs(m[1] - albedo[2]) <= 6 * se[1] + 1e-4
+    # Exponent 0: R (n + 2) / (2 pi) = R / pi on the half of the hemisphere facing wo.
+    flat = sc.RetroreflectiveBxDF(0.5, 0.0)
+    np.testing.assert_allclose(flat.f(_dir(0.0), _dir(0.8)), [0.5 / np.pi], rtol=1e-14)
+    np.testing.assert_allclose(flat.f(_dir(1.2), _dir(1.2, 0.3 + np.pi)), [0.0])

@@ -8,6 +8,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from jax.test_util import check_grads
 
 import radiometria.scattering as sc
 
@@ -108,3 +109,65 @@ def test_conductor_ior_matches_mitsuba_presets(metal):
             np.testing.assert_allclose(ours, np.array(weight), rtol=1e-5)
     finally:
         mi.set_variant("scalar_rgb")
+
+
+# --------------------------------------------------------------------------------------------
+# Relative complex index of two absorbing media (thesis footnote 18)
+
+
+def _fresnel_numpy(cos_i, n1, n2):
+    """Unpolarised reflectance from the complex Fresnel amplitudes with complex n1, n2 (Born &
+    Wolf 14.2): n1 sin(theta_1) = n2 sin(theta_2), r_s = (n1 c1 - n2 c2)/(n1 c1 + n2 c2),
+    r_p = (n2 c1 - n1 c2)/(n2 c1 + n1 c2); the transmitted wave decays (Im(n2 c2) >= 0)."""
+    c1 = np.asarray(cos_i, complex)
+    s1 = np.sqrt(1 - c1**2)
+    c2 = np.sqrt(1 - (n1 * s1 / n2) ** 2)
+    c2 = np.where(np.imag(n2 * c2) < 0, -c2, c2)
+    r_s = (n1 * c1 - n2 * c2) / (n1 * c1 + n2 * c2)
+    r_p = (n2 * c1 - n1 * c2) / (n2 * c1 + n1 * c2)
+    return 0.5 * (np.abs(r_s) ** 2 + np.abs(r_p) ** 2)
+
+
+def test_relative_complex_ior_vacuum_is_identity():
+    eta, k = sc.conductor_ior("Au", jnp.linspace(400.0, 700.0, 7))
+    e, kk = sc.relative_complex_ior(1.0, 0.0, eta, k)
+    np.testing.assert_allclose(e, eta, rtol=1e-15)
+    np.testing.assert_allclose(kk, k, rtol=1e-15)
+
+
+def test_relative_complex_ior_matches_complex_division_and_fresnel():
+    rng = np.random.default_rng(0)
+    n = 200
+    eta_i = rng.uniform(1.0, 2.0, n)
+    k_i = rng.uniform(0.0, 0.05, n)  # a weakly absorbing incident medium (tinted glass)
+    eta_t = rng.uniform(0.1, 3.0, n)
+    k_t = rng.uniform(1.0, 5.0, n)  # a metal
+    e, k = sc.relative_complex_ior(eta_i, k_i, eta_t, k_t)
+    ratio = (eta_t + 1j * k_t) / (eta_i + 1j * k_i)
+    np.testing.assert_allclose(e, ratio.real, rtol=1e-14)
+    np.testing.assert_allclose(k, ratio.imag, rtol=1e-14)
+    assert float(jnp.min(k)) >= 0
+    cos_i = rng.uniform(0.0, 1.0, n)
+    F = sc.fresnel_conductor(cos_i, e, k)
+    F_ref = _fresnel_numpy(cos_i, eta_i + 1j * k_i, eta_t + 1j * k_t)
+    np.testing.assert_allclose(F, F_ref, rtol=1e-10, atol=1e-14)
+    # Gold seen from inside water (eta_i = 1.333) is darker than seen from air at normal
+    # incidence: the index contrast is smaller.
+    eta_au, k_au = sc.conductor_ior("Au", 550.0)
+    ew, kw = sc.relative_complex_ior(1.333, 0.0, eta_au, k_au)
+    assert float(sc.fresnel_conductor(1.0, ew, kw)) < float(sc.fresnel_conductor(1.0, eta_au, k_au))
+
+
+def test_relative_complex_ior_transformations_and_errors():
+    f = jax.jit(sc.relative_complex_ior)
+    out = f(1.5, 0.01, jnp.array([0.2, 0.3]), jnp.array([3.0, 2.0]))
+    ref = sc.relative_complex_ior(1.5, 0.01, jnp.array([0.2, 0.3]), jnp.array([3.0, 2.0]))
+    np.testing.assert_allclose(out, ref, rtol=1e-15)
+    check_grads(lambda a, b: sc.relative_complex_ior(a, 0.1, b, 2.0)[1], (1.4, 0.5), 1)
+    g = eqx.filter_jit(sc.relative_complex_ior)
+    with pytest.raises(eqx.EquinoxRuntimeError, match="eta_i"):
+        g(0.0, 0.0, 1.0, 1.0)
+    with pytest.raises(eqx.EquinoxRuntimeError, match="k_t"):
+        g(1.0, 0.0, 1.0, -1.0)
+    with pytest.raises(ValueError, match="broadcast"):
+        sc.relative_complex_ior(jnp.ones(2), 0.0, jnp.ones(3), 0.0)
