@@ -38,7 +38,7 @@ import numpy as np
 
 from ...radiometry import BlackbodySpectrum, PiecewiseLinearSpectrum
 from .._geometry._mesh import icosphere
-from .._registry import INTEGRATORS, LIGHTS, MATERIALS
+from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS
 from .._spectral import LinearRGB, SpectralValue
 from ._description import (
     CameraDescription,
@@ -440,10 +440,11 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
 
 def _sensor(ctx: _Ctx, node: _Node):
     kind = ctx.attr(node, "type")
-    if kind != "perspective":
+    if kind not in CAMERAS:
         raise ctx.err(
-            node, f"unsupported sensor type '{kind}' (line {node.line}); only 'perspective'"
-        )
+            node, f"unsupported sensor type '{kind}' (line {node.line}); supported: "
+            f"{sorted(CAMERAS)}"
+        )  # fmt: skip
     _only_children(ctx, node, {"film", "sampler"})
     props = _properties(
         ctx, node, {"fov", "fov_axis", "focal_length", "to_world", "near_clip", "far_clip",
