@@ -1,7 +1,7 @@
 """BVH closest hits against an independent ray caster: Mitsuba 3's `Scene.ray_intersect`.
 
 `test_bvh.py` checks `intersect_closest` against our own brute force; here the reference is
-Mitsuba 3 (Embree / its own kd-tree, float32), on random triangle soups and icospheres of
+Mitsuba 3 (Embree or its own kd-tree, float32), on random triangle soups and icospheres of
 about 1e2 to 1e5 triangles and random rays (half aimed into the mesh's box, half isotropic).
 
 Mitsuba runs in a subprocess: its `llvm_ad_rgb` variant vectorises over all rays but needs a
@@ -14,7 +14,7 @@ Agreement, with both sides in float32:
 
 - the same primitive and `t` to relative `RTOL_T` = 1e-5 (about 170 float32 ulp: the two
   implementations compute `t` with different but stable formulas, Woop's watertight test here
-  and Embree's / Mitsuba's Moeller-Trumbore there, each a few ulp from the exact `t`) plus an
+  and Embree's or Mitsuba's own triangle test there, each a few ulp from the exact `t`) plus an
   absolute `ATOL_ULPS` = 8 ulp of the largest coordinate `L` of the scene: `t` is a difference
   of positions, so its rounding error is absolute, a few ulp(L), which dominates for rays that
   start within ~1e-3 of a triangle (seen: 3e-8 at t = 2e-3, L ~ 2, ulp(L) = 2.4e-7);
