@@ -20,38 +20,80 @@ from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._registry import figure, save
 
 
-@figure("fig_2_1_cmfs")
-def fig_2_1_cmfs(out_dir, *, smoke: bool = False):
-    """CIE 1931 RGB (Wright & Guild) and XYZ colour-matching functions (thesis fig. 2.1)."""
-    import matplotlib.pyplot as plt
+def cmfs_figure_data() -> dict:
+    """What fig. 2.1 plots: `{"rgb": ..., "lms": ..., "xyz": ...}`, each `(wavelengths_nm, values)`.
 
+    - `rgb`: the CIE 1931 RGB colour-matching functions (Wright & Guild, the library's
+        table `get_cmfs("Wright & Guild 1931 2 Degree RGB CMFs")`), (n,) [nm] and (n, 3);
+    - `lms`: the Stockman & Sharpe (2000) 2° cone fundamentals $\bar l, \bar m, \bar s$
+        (energy units, each normalised to a peak of 1), as colour-science tabulates them
+        (`colour.MSDS_CMFS["Stockman & Sharpe 2 Degree Cone Fundamentals"]`, from the CVRL
+        database, http://www.cvrl.org, 390-830 nm in 1 nm steps) [dimensionless];
+    - `xyz`: the CIE 1931 2° standard observer $\bar x, \bar y, \bar z$ (`get_cmfs()`).
+
+    colour-science is a runtime dependency; it is imported here, when the figure is drawn,
+    so that importing `radiometria` does not pay for it.
+    """
+    import colour
+
+    lms = colour.MSDS_CMFS["Stockman & Sharpe 2 Degree Cone Fundamentals"]
     rgb = get_cmfs("Wright & Guild 1931 2 Degree RGB CMFs")
     xyz = get_cmfs("CIE 1931 2 Degree Standard Observer")
-    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(10.0, 3.8))
-    wl = np.asarray(rgb.wavelengths_nm)
+    return {
+        "rgb": (np.asarray(rgb.wavelengths_nm), np.asarray(rgb.values)),
+        "lms": (np.asarray(lms.wavelengths, float), np.asarray(lms.values, float)),
+        "xyz": (np.asarray(xyz.wavelengths_nm), np.asarray(xyz.values)),
+    }
+
+
+@figure("fig_2_1_cmfs")
+def fig_2_1_cmfs(out_dir, *, smoke: bool = False):
+    """Colour-matching functions and cone sensitivities: CIE 1931 RGB, LMS, CIE 1931 XYZ.
+
+    Left: the CIE 1931 RGB colour-matching functions (Wright & Guild) with the primaries'
+    wavelengths. Middle: the spectral sensitivities of the three kinds of cones, the
+    Stockman & Sharpe (2000) 2° cone fundamentals (colour-science's table). Right: the CIE
+    1931 XYZ colour-matching functions, a linear transform of the RGB ones. The data are
+    `cmfs_figure_data()`.
+
+    !!! note "Thesis"
+        Fig. 2.1, section 2.2.
+
+    ??? cite "References"
+        `Stockman2000`.
+    """
+    import matplotlib.pyplot as plt
+
+    data = cmfs_figure_data()
+    fig, (ax0, ax1, ax2) = plt.subplots(1, 3, figsize=(14.5, 3.8), layout="constrained")
+    wl, v = data["rgb"]
     for k, (c, lab) in enumerate(zip("rgb", [r"$\bar r$", r"$\bar g$", r"$\bar b$"], strict=True)):
-        ax0.plot(wl, np.asarray(rgb.values)[:, k], color=c, label=lab)
+        ax0.plot(wl, v[:, k], color=c, label=lab)
     ax0.axhline(0.0, color="k", lw=0.6)
     for p in (435.8, 546.1, 700.0):  # the CIE 1931 RGB primaries (thesis section 2.2)
         ax0.axvline(p, color="0.6", ls=":", lw=0.8)
     ax0.set_title("CIE 1931 RGB colour-matching functions")
-    ax0.set_xlabel("wavelength [nm]")
     ax0.set_ylabel("tristimulus value")
-    ax0.legend()
-    wl = np.asarray(xyz.wavelengths_nm)
+    wl, v = data["lms"]
     for k, (c, lab) in enumerate(
         zip(
             ["tab:red", "tab:green", "tab:blue"],
-            [r"$\bar x$", r"$\bar y$", r"$\bar z$"],
+            [r"L ($\bar l$)", r"M ($\bar m$)", r"S ($\bar s$)"],
             strict=True,
         )
     ):
-        ax1.plot(wl, np.asarray(xyz.values)[:, k], color=c, label=lab)
-    ax1.set_xlim(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM)
-    ax1.set_title("CIE 1931 XYZ colour-matching functions (2°)")
-    ax1.set_xlabel("wavelength [nm]")
-    ax1.legend()
-    for ax in (ax0, ax1):
+        ax1.plot(wl, v[:, k], color=c, label=lab)
+    ax1.set_title("cone fundamentals (Stockman & Sharpe 2°)")
+    ax1.set_ylabel("relative sensitivity (energy)")
+    wl, v = data["xyz"]
+    colours, labels = ["tab:red", "tab:green", "tab:blue"], [r"$\bar x$", r"$\bar y$", r"$\bar z$"]
+    for k, (c, lab) in enumerate(zip(colours, labels, strict=True)):
+        ax2.plot(wl, v[:, k], color=c, label=lab)
+    ax2.set_title("CIE 1931 XYZ colour-matching functions (2°)")
+    for ax in (ax0, ax1, ax2):
+        ax.set_xlim(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM)
+        ax.set_xlabel("wavelength [nm]")
+        ax.legend()
         ax.grid(True, alpha=0.3)
     return save(fig, out_dir, "fig_2_1_cmfs")
 

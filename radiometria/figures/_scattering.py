@@ -1,5 +1,6 @@
 """Figures for `radiometria.scattering` (thesis chapter 3)."""
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -7,14 +8,20 @@ import numpy as np
 from ..colorimetry import XYZ_to_sRGB, get_illuminant, sd_to_XYZ
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ..scattering import (
+    ConductorBxDF,
+    DielectricBxDF,
     DiffuseBxDF,
+    DiffuseTransmissionBxDF,
     OrenNayarBxDF,
+    RetroreflectiveBxDF,
     RoughConductorBxDF,
     RoughDielectricBxDF,
     conductor_ior,
     fresnel_conductor,
     fresnel_dielectric,
     fresnel_dielectric_polarized,
+    reflect,
+    refract,
 )
 from ._registry import figure, save
 
@@ -234,3 +241,371 @@ def fig_3_albedo_roughness(out_dir, *, smoke: bool = False):
     axes[0].set_ylabel(r"directional albedo $\rho(\omega_o)$ (eq. 3.5)")
     fig.suptitle("Energy loss of single-scattering microfacet models (white furnace)")
     return save(fig, out_dir, "fig_3_albedo_roughness")
+
+
+# --------------------------------------------------------------------------------------------
+# Reflection and transmission types (thesis fig. 3.1)
+
+_THETA_LIGHT_DEG = 45.0  # fig. 3.1: light arrives 45 degrees off the normal [deg]
+
+
+def _plane_directions(t: np.ndarray) -> np.ndarray:
+    """Unit vectors $(\\sin t, 0, \\cos t)$ of the plane of incidence, $t$ from the normal."""
+    return np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], axis=-1)
+
+
+@eqx.filter_jit
+def _f_importance(bxdf, wo, wi):
+    return bxdf.f(wo, wi, mode="importance")
+
+
+def reflection_types_data(*, n_angles: int = 721, n_samples: int = 65_536) -> list[dict]:
+    """What fig. 3.1 plots: one dict per panel, the lobes computed with the library's BxDFs.
+
+    The light arrives from $\\omega_l$, $45°$ off the normal in the $xz$ plane. Each dict has
+    `title`, `bxdf`, `light` ($\\omega_l$, (3,)), and either
+
+    - `kind="lobe"`: `t` (n_angles,), the polar angle from the normal over the whole circle
+        [rad], and `lobe`, the scattered flux per unit solid angle
+        $f(\\omega_l, \\omega)\\,|\\cos\\theta|$ at $\\omega = (\\sin t, 0, \\cos t)$ ($f$ in
+        importance mode: $f(\\omega, \\omega_l)$, light from $\\omega_l$ into $\\omega$)
+        [sr^-1]; or
+    - `kind="delta"`: `directions` (k, 3), the specular directions from `sample_f`, and
+        `fractions` (k,), the flux fraction each carries (pdf times weight: $F_r$, $1 - F_r$).
+
+    and `albedo_r`, `albedo_t`: the reflected and transmitted fractions of the incident flux
+    (Monte Carlo means of `sample_f` weights, `n_samples` samples, key 0), with their
+    standard errors `se_r`, `se_t` [dimensionless].
+    """
+    theta_l = np.radians(_THETA_LIGHT_DEG)
+    light = np.array([-np.sin(theta_l), 0.0, np.cos(theta_l)])
+    eta_au, k_au = (np.asarray(x) for x in conductor_ior("Au", 550.0))
+    panels = [
+        ("diffuse reflection (Lambert, R = 0.8)", DiffuseBxDF(0.8), "lobe"),
+        (r"glossy reflection (GGX, $\alpha$ = 0.25)", RoughConductorBxDF(0.25, 1.0, 1e4), "lobe"),
+        ("perfectly specular reflection (gold)", ConductorBxDF(eta_au, k_au), "delta"),
+        ("retroreflection (R = 0.8, n = 12)", RetroreflectiveBxDF(0.8, 12.0), "lobe"),
+        ("diffuse transmission (R = 0.1, T = 0.7)", DiffuseTransmissionBxDF(0.1, 0.7), "lobe"),
+        (r"specular transmission (glass, $\eta$ = 1.5)", DielectricBxDF(1.5), "delta"),
+    ]
+    t = np.linspace(-np.pi, np.pi, n_angles)
+    u = jax.random.uniform(jax.random.key(0), (n_samples, 3))
+
+    @eqx.filter_jit
+    def scatter(bxdf, light):  # MC weights and transmission flags of sample_f from light
+        wl = jnp.broadcast_to(light, (n_samples, 3))
+        s = bxdf.sample_f(wl, u[:, 0], u[:, 1:], mode="importance")
+        return s.weight()[:, 0], s.is_transmission
+
+    out = []
+    for title, bxdf, kind in panels:
+        w, trans = (np.asarray(x) for x in scatter(bxdf, jnp.asarray(light)))
+        d = {"title": title, "bxdf": bxdf, "kind": kind, "light": light}
+        for side, mask in (("r", ~trans), ("t", trans)):
+            wm = np.where(mask, w, 0.0)
+            d[f"albedo_{side}"] = float(wm.mean())
+            d[f"se_{side}"] = float(wm.std() / np.sqrt(n_samples))
+        if kind == "lobe":
+            wt = _plane_directions(t)
+            f = np.asarray(_f_importance(bxdf, jnp.asarray(light), jnp.asarray(wt)))
+            d.update(t=t, lobe=f[:, 0] * np.abs(wt[:, 2]))
+        else:
+            # u_lobe = 0 picks reflection, u_lobe -> 1 transmission (when there is one).
+            lobes = bxdf.sample_f(
+                jnp.asarray(np.broadcast_to(light, (2, 3))),
+                jnp.asarray([0.0, 1.0 - 1e-7]),
+                jnp.full((2, 2), 0.5),
+                mode="importance",
+            )
+            frac = np.asarray(lobes.pdf) * np.asarray(lobes.weight())[:, 0]
+            dirs = np.asarray(lobes.wi)
+            keep = [0] + ([1] if bool(np.asarray(lobes.is_transmission)[1]) else [])
+            d.update(directions=dirs[keep], fractions=frac[keep])
+        out.append(d)
+    return out
+
+
+@figure("fig_3_1_reflection_types")
+def fig_3_1_reflection_types(out_dir, *, smoke: bool = False):
+    """Types of reflection and transmission, drawn from the library's BxDFs.
+
+    Polar plots in the plane of incidence of the flux scattered per unit solid angle,
+    $f(\\omega, \\omega_l)|\\cos\\theta|$, for light arriving $45°$ off the normal (grey arrow):
+    diffuse (`DiffuseBxDF`), glossy (`RoughConductorBxDF`, GGX, unit Fresnel term), perfectly
+    specular (`ConductorBxDF`, gold at 550 nm), retroreflective (`RetroreflectiveBxDF`),
+    diffuse transmission (`DiffuseTransmissionBxDF`, a Lambertian BRDF and BTDF) and specular
+    transmission (`DielectricBxDF`, glass). The specular lobes are Dirac deltas, drawn as
+    arrows whose length is the flux fraction they carry ($F_r$ and $1 - F_r$). Each panel
+    states the reflected and transmitted fractions $\\rho$, $\\tau$ (Monte Carlo estimates from
+    `sample_f`). Above the horizontal line is the reflection hemisphere, below transmission.
+    The data are `reflection_types_data()`.
+
+    !!! note "Thesis"
+        Fig. 3.1, section 3.1 (diffuse, glossy specular, perfectly specular reflection,
+        retroreflective material; transmission), eq. 3.4.
+    """
+    import matplotlib.pyplot as plt
+
+    panels = reflection_types_data(
+        n_angles=361 if smoke else 1441, n_samples=4_096 if smoke else 262_144
+    )
+    fig, axes = plt.subplots(
+        2, 3, figsize=(12.0, 8.4), subplot_kw={"projection": "polar"}, layout="constrained"
+    )
+    for ax, p in zip(axes.ravel(), panels, strict=True):
+        ax.set_theta_zero_location("N")
+        ax.set_theta_direction(-1)  # t > 0 towards +x, on the right
+        if p["kind"] == "lobe":
+            r_max = 1.15 * float(p["lobe"].max())
+            ax.fill(p["t"], p["lobe"], color="tab:blue", alpha=0.25)
+            ax.plot(p["t"], p["lobe"], color="tab:blue", lw=1.4)
+            ax.set_rlabel_position(100)
+        else:
+            r_max = 1.15
+            for w, frac in zip(p["directions"], p["fractions"], strict=True):
+                t = np.arctan2(w[0], w[2])
+                ax.annotate(
+                    "",
+                    xy=(t, frac),
+                    xytext=(0, 0),
+                    arrowprops={"arrowstyle": "-|>", "color": "tab:blue", "lw": 2.2},
+                )
+                ax.annotate(
+                    f"{frac:.2f}",
+                    (t, frac),
+                    textcoords="offset points",
+                    xytext=(4, 4),
+                    fontsize=8,
+                    color="tab:blue",
+                )
+            ax.set_yticklabels([])
+        t_l = np.arctan2(p["light"][0], p["light"][2])
+        ax.annotate(
+            "",
+            xy=(0, 0),
+            xytext=(t_l, r_max),
+            arrowprops={"arrowstyle": "-|>", "color": "0.45", "lw": 1.4},
+        )
+        ax.plot([np.pi / 2, -np.pi / 2], [r_max, r_max], color="k", lw=1.6)  # the surface
+        ax.plot([np.pi / 2, -np.pi / 2], [0, 0], color="k", lw=1.6)
+        ax.set_rmax(r_max)
+        ax.set_xticks(np.radians(np.arange(0, 360, 45)))
+        ax.tick_params(labelsize=7)
+        text = rf"$\rho$ = {p['albedo_r']:.3f}"
+        if p["albedo_t"] > 0:
+            text += rf", $\tau$ = {p['albedo_t']:.3f}"
+        ax.set_title(f"{p['title']}\n{text}", fontsize=9)
+    fig.suptitle(
+        r"Reflection and transmission types, $f(\omega,\omega_l)\,|\cos\theta|$ [sr$^{-1}$], "
+        r"light at $\theta_l$ = 45° (thesis fig. 3.1)"
+    )
+    return save(fig, out_dir, "fig_3_1_reflection_types")
+
+
+# --------------------------------------------------------------------------------------------
+# Specular reflection and refraction geometry (thesis fig. 3.2)
+
+_REFRACTION_CASES = [  # (eta_i, eta_t, theta_i [deg]): air to glass; glass to air, below and
+    (1.0, 1.5, 50.0),  # above the critical angle (41.8 deg)
+    (1.5, 1.0, 30.0),
+    (1.5, 1.0, 55.0),
+]
+
+
+def reflection_refraction_data(*, n_angles: int = 181) -> dict:
+    """What fig. 3.2 plots, from `reflect`, `refract` and `fresnel_dielectric`.
+
+    The interface is the plane $z = 0$ with normal $\\hat n = +z$ pointing into the medium
+    of incidence $\\eta_i$; every direction points away from the interface (thesis
+    convention). Keys:
+
+    - `cases`: one dict per diagram with `eta_i`, `eta_t` [dimensionless], `theta_i` [rad],
+        `wi` (3,) (towards the light), `wr` = `reflect(wi, n)`, `wt`, `valid` =
+        `refract(wi, n, eta_t / eta_i)`, `theta_r`, `theta_t` [rad] measured from the
+        library's directions ($\\theta_r$ from $+\\hat n$, $\\theta_t$ from $-\\hat n$; NaN
+        under total internal reflection), and `R` = `fresnel_dielectric(cos theta_i,
+        eta_t / eta_i)` (reflected fraction; $1 - R$ is transmitted);
+    - `theta_i` (n_angles,) on $[0, \\pi/2)$ [rad] and, for `"air_glass"` ($\\eta_t/\\eta_i =
+        1.5$) and `"glass_air"` ($1/1.5$), dicts with `theta_r`, `theta_t` (NaN where
+        `valid` is False) and `valid`: the angle curves.
+    """
+    normal = np.array([0.0, 0.0, 1.0])
+
+    def geometry(theta_i, eta):
+        wi = np.stack([-np.sin(theta_i), np.zeros_like(theta_i), np.cos(theta_i)], axis=-1)
+        wr = np.asarray(reflect(wi, normal))
+        wt, valid = (np.asarray(x) for x in refract(wi, normal, eta))
+        theta_r = np.arccos(np.clip(wr @ normal, -1.0, 1.0))
+        theta_t = np.where(valid, np.arccos(np.clip(-(wt @ normal), -1.0, 1.0)), np.nan)
+        return wi, wr, wt, valid, theta_r, theta_t
+
+    cases = []
+    for eta_i, eta_t, deg in _REFRACTION_CASES:
+        theta_i = np.radians(deg)
+        wi, wr, wt, valid, theta_r, theta_t = geometry(np.array(theta_i), eta_t / eta_i)
+        R = float(np.asarray(fresnel_dielectric(np.cos(theta_i), eta_t / eta_i)))
+        cases.append(
+            {
+                "eta_i": eta_i,
+                "eta_t": eta_t,
+                "theta_i": theta_i,
+                "wi": wi,
+                "wr": wr,
+                "wt": wt,
+                "valid": bool(valid),
+                "theta_r": float(theta_r),
+                "theta_t": float(theta_t),
+                "R": R,
+            }
+        )
+    theta = np.linspace(0.0, np.pi / 2, n_angles, endpoint=False)
+    curves = {}
+    for name, eta in (("air_glass", 1.5), ("glass_air", 1.0 / 1.5)):
+        _, _, _, valid, theta_r, theta_t = geometry(theta, eta)
+        curves[name] = {"theta_r": theta_r, "theta_t": theta_t, "valid": valid}
+    return {"cases": cases, "theta_i": theta, **curves}
+
+
+def _angle_arc(ax, start_deg: float, end_deg: float, radius: float, label: str, colour: str):
+    """An arc between two polar angles of the diagram (degrees from +x), with its label."""
+    from matplotlib.patches import Arc
+
+    lo, hi = sorted((start_deg, end_deg))
+    ax.add_patch(Arc((0, 0), 2 * radius, 2 * radius, theta1=lo, theta2=hi, color=colour, lw=1))
+    mid = np.radians(0.5 * (lo + hi))
+    ax.annotate(
+        label,
+        (1.3 * radius * np.cos(mid), 1.3 * radius * np.sin(mid)),
+        color=colour,
+        ha="center",
+        va="center",
+        fontsize=9,
+    )
+
+
+@figure("fig_3_2_reflection_refraction")
+def fig_3_2_reflection_refraction(out_dir, *, smoke: bool = False):
+    """Geometry of specular reflection and refraction at a smooth interface.
+
+    Three diagrams in the plane of incidence: light from air onto glass, and from glass into
+    air below and beyond the critical angle $\\theta_c = \\arcsin(\\eta_t/\\eta_i)$ (total
+    internal reflection). The reflected and refracted rays are `reflect` and `refract` of
+    the incident direction; the angles $\\theta_i$, $\\theta_r = \\theta_i$ (law of reflection)
+    and $\\theta_t$ with $\\eta_i\\sin\\theta_i = \\eta_t\\sin\\theta_t$ (Snell's law) are measured
+    on those vectors, and each ray's opacity is its flux fraction $R$, $1 - R$ from
+    `fresnel_dielectric`. Right: $\\theta_r$ and $\\theta_t$ against $\\theta_i$ for both
+    directions of travel. The data are `reflection_refraction_data()`.
+
+    !!! note "Thesis"
+        Fig. 3.2, eq. 3.7-3.12, section 3.1.1.
+    """
+    import matplotlib.pyplot as plt
+
+    data = reflection_refraction_data(n_angles=91 if smoke else 451)
+    fig, axes = plt.subplots(1, 4, figsize=(17.0, 4.4), layout="constrained")
+    for ax, c in zip(axes[:3], data["cases"], strict=True):
+        glass_top = c["eta_i"] > c["eta_t"]
+        ax.add_patch(
+            plt.Rectangle(
+                (-1.3, -1.3),
+                2.6,
+                1.3,
+                color="lightsteelblue" if not glass_top else "white",
+                zorder=0,
+            )
+        )
+        ax.add_patch(
+            plt.Rectangle(
+                (-1.3, 0.0), 2.6, 1.3, color="lightsteelblue" if glass_top else "white", zorder=0
+            )
+        )
+        ax.axhline(0.0, color="k", lw=1.2)
+        ax.plot([0, 0], [-1.2, 1.2], color="0.4", ls="--", lw=0.8)
+        ax.annotate(r"$\hat n$", (0.03, 1.12), fontsize=10)
+        xz = lambda w: (w[0], w[2])  # noqa: E731 -- the diagram shows the xz plane
+        ax.annotate(
+            "",
+            xy=(0, 0),
+            xytext=xz(c["wi"]),
+            arrowprops={"arrowstyle": "-|>", "color": "k", "lw": 1.8},
+        )
+        ax.annotate(
+            "",
+            xy=xz(c["wr"]),
+            xytext=(0, 0),
+            arrowprops={
+                "arrowstyle": "-|>",
+                "color": "tab:blue",
+                "lw": 1.8,
+                "alpha": max(c["R"], 0.15),
+            },
+        )
+        deg = lambda w: np.degrees(np.arctan2(w[2], w[0]))  # noqa: E731
+        _angle_arc(ax, 90.0, deg(c["wi"]), 0.35, r"$\theta_i$", "k")
+        _angle_arc(ax, 90.0, deg(c["wr"]), 0.45, r"$\theta_r$", "tab:blue")
+        text = (
+            rf"$\eta_i$ = {c['eta_i']:g}, $\eta_t$ = {c['eta_t']:g}"
+            "\n"
+            rf"$\theta_i$ = {np.degrees(c['theta_i']):.1f}°, "
+            rf"$\theta_r$ = {np.degrees(c['theta_r']):.1f}°"
+        )
+        if c["valid"]:
+            ax.annotate(
+                "",
+                xy=xz(c["wt"]),
+                xytext=(0, 0),
+                arrowprops={
+                    "arrowstyle": "-|>",
+                    "color": "tab:red",
+                    "lw": 1.8,
+                    "alpha": max(1.0 - c["R"], 0.15),
+                },
+            )
+            _angle_arc(ax, -90.0, deg(c["wt"]), 0.4, r"$\theta_t$", "tab:red")
+            text += rf", $\theta_t$ = {np.degrees(c['theta_t']):.1f}°"
+            text += "\n" + rf"$R$ = {c['R']:.3f}, $T$ = {1 - c['R']:.3f}"
+            title = "refraction" + (" into glass" if not glass_top else " into air")
+        else:
+            text += "\n" + r"total internal reflection, $R$ = 1"
+            title = r"beyond the critical angle $\theta_c$"
+        ax.text(-1.25, -1.25, text, fontsize=8, va="bottom")
+        ax.set_xlim(-1.3, 1.3)
+        ax.set_ylim(-1.3, 1.3)
+        ax.set_aspect("equal")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_title(title, fontsize=10)
+    ax = axes[3]
+    deg_i = np.degrees(data["theta_i"])
+    ax.plot(
+        deg_i,
+        np.degrees(data["air_glass"]["theta_r"]),
+        color="tab:blue",
+        label=r"$\theta_r$ (both)",
+    )
+    ax.plot(
+        deg_i,
+        np.degrees(data["air_glass"]["theta_t"]),
+        color="tab:red",
+        label=r"$\theta_t$, air $\to$ glass",
+    )
+    ax.plot(
+        deg_i,
+        np.degrees(data["glass_air"]["theta_t"]),
+        color="tab:red",
+        ls="--",
+        label=r"$\theta_t$, glass $\to$ air",
+    )
+    theta_c = np.degrees(np.arcsin(1.0 / 1.5))
+    ax.axvline(theta_c, color="0.4", ls=":", lw=1)
+    ax.annotate(rf"$\theta_c$ = {theta_c:.1f}°", (theta_c + 1, 5), fontsize=8)
+    ax.set_xlim(0, 90)
+    ax.set_ylim(0, 90)
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.3)
+    ax.set_xlabel(r"$\theta_i$ [deg]")
+    ax.set_ylabel("angle [deg]")
+    ax.set_title(r"law of reflection and Snell's law, $\eta$ = 1.5", fontsize=10)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.suptitle("Specular reflection and refraction (thesis fig. 3.2, eq. 3.7-3.12)")
+    return save(fig, out_dir, "fig_3_2_reflection_refraction")
