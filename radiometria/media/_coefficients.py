@@ -222,11 +222,11 @@ def absorption_index_from_coefficient(
     **Returns:**
 
     $\kappa$ [dimensionless]. The inverse is `absorption_coefficient_from_index`.
-    (Glass, $\kappa_a = 10$ m^-1 at 550 nm (thesis table 1.1), has $\kappa \approx 4.4\cdot
+    (Glass, with $\kappa_a = 10$ m^-1 at 550 nm, has $\kappa \approx 4.4\cdot
     10^{-7}$.)
 
     !!! note "Thesis"
-        Section 1.3 (complex refractive index, $\kappa = \kappa_a/2k_0$); table 1.1.
+        Section 1.3 (complex refractive index, $\kappa = \kappa_a/2k_0$).
 
     ??? cite "References"
         `Born1999` §14.1.
