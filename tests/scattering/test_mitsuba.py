@@ -187,18 +187,3 @@ def test_rough_conductor_sampling_weight_matches_mitsuba_in_expectation():
     w = np.asarray(s.weight())[:, 0]
     se = np.sqrt(w.var() / n + w_mi.var() / n)
     assert abs(w.mean() - w_mi.mean()) < 6 * se
-
-
-def test_diffuse_transmission_matches_mitsuba_difftrans():
-    # Mitsuba's `difftrans` (a Lambertian BTDF, f = T/pi on the far side) exists in Mitsuba 0.6;
-    # Mitsuba 3 releases up to 3.9 do not ship it, so the comparison is skipped there.
-    try:
-        bsdf = mi.load_dict({"type": "difftrans", "transmittance": 0.6})
-    except RuntimeError as e:
-        pytest.skip(f"Mitsuba {mi.__version__} has no `difftrans` plugin ({e})")
-    ours = sc.DiffuseTransmissionBxDF(0.0, 0.6)
-    wo = _dirs(64, 31, "upper")
-    wi = _dirs(64, 32)
-    ev, pd = _mi_eval_pdf(bsdf, wo, wi)
-    _close(np.asarray(ours.f(wo, wi))[:, 0] * np.abs(wi[:, 2]), ev)
-    _close(ours.pdf(wo, wi), pd)
