@@ -8,13 +8,13 @@ $$L_o(p, \omega_o) = L_e(p, \omega_o) + \int_{S^2} f(p, \omega_o, \omega_i)\, L_
 for a batch of rays at once, at the four hero wavelengths of each path, by unidirectional
 path tracing with next-event estimation (one light sample per vertex), multiple importance
 sampling of light and BSDF samples with the power heuristic, and Russian roulette. Depths
-follow Mitsuba 3's `path` integrator: `max_depth` is the largest
-  number of path segments counted from the camera, so `max_depth=1` sees only emitters visible
-  from the camera and `max_depth=2` is direct illumination; Russian roulette starts once
-  `rr_depth` segments have been traced (Mitsuba's default 5), with survival probability
-  `min(max_lambda beta, 0.95)`. The scene's plugins do the rest: its accelerator finds hits,
-  its light (`AbstractLight`) samples and weighs next-event estimation, and its materials
-  (`MaterialSet`) build the BxDF at each hit.
+follow Mitsuba 3's `path` integrator: `max_depth` is the largest number of path segments
+counted from the camera, so `max_depth=1` sees only emitters visible from the camera and
+`max_depth=2` is direct illumination (the `Direct` integrator); Russian roulette starts once
+`rr_depth` segments have been traced (Mitsuba's default 5), with survival probability
+`min(max_lambda beta, 0.95)`. The scene's plugins do the rest: its accelerator finds hits,
+its light (`AbstractLight`) samples and weighs next-event estimation, and its materials
+(`MaterialSet`) build the BxDF at each hit.
 
 Everything is structure-of-arrays over the ray batch, and the loop over path segments is one
 `lax.scan` of static length `max_depth` (one compiled copy of a segment: its hit, the emission
