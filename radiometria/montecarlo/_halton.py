@@ -32,7 +32,6 @@ from .._checks import check_positive_int
 from .._types import Float, Key
 from ._samplers import _check_sequence_options
 
-_mix32 = mix32  # render/_samplers.py imports it from here
 SCRAMBLES = (None, "none", "permutation", "owen")
 
 

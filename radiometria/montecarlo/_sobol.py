@@ -31,7 +31,6 @@ from jax import Array
 
 from .._bits import (
     laine_karras_permutation,
-    owen_scramble_32 as owen_scramble_32,  # render/_samplers.py imports it from here
     reverse_bits_32,
     uint32_to_unit_float,
 )
