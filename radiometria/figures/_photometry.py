@@ -7,24 +7,53 @@ from ..photometry import luminous_efficiency_table
 from ._registry import figure, save
 
 
-@figure("fig_2_luminous_efficiency")
-def fig_2_luminous_efficiency(out_dir, *, smoke: bool = False):
-    """CIE photopic V(lambda) and scotopic V'(lambda), and the spectral luminous efficacy K V."""
-    import matplotlib.pyplot as plt
+def luminous_efficiency_data() -> dict:
+    """What the luminous efficiency figure plots: `{"photopic": ..., "scotopic": ...}`.
 
-    fig, (ax, ax_k) = plt.subplots(1, 2, figsize=(10.0, 3.8), layout="constrained")
-    curves = [
-        ("photopic", r"photopic $V(\lambda)$ (CIE 1924)", "$K_m$", K_M, "tab:green"),
-        ("scotopic", r"scotopic $V'(\lambda)$ (CIE 1951)", "$K'_m$", K_M_SCOTOPIC, "tab:blue"),
-    ]
-    for vision, label, symbol, efficacy, colour in curves:
+    Each entry is a dict with `wavelengths_nm` (n,) [nm] and `values` (n,), the packaged CIE
+    table (`luminous_efficiency_table`, V(lambda) of CIE 1924 or V'(lambda) of CIE 1951)
+    [dimensionless]; `efficacy`, the maximum luminous efficacy $K_m$ or $K'_m$ [lm W^-1];
+    `efficacy_curve` = `efficacy * values` [lm W^-1]; and `peak_nm`, the centre of the
+    plateau where the (rounded) table equals its maximum [nm].
+    """
+    out = {}
+    for vision, efficacy in (("photopic", K_M), ("scotopic", K_M_SCOTOPIC)):
         wavelengths_nm, values = (np.asarray(a) for a in luminous_efficiency_table(vision))
         # The tables are rounded, so V' equals 1 on 506-508 nm: mark the plateau's centre.
-        peak = wavelengths_nm[values == values.max()].mean()
-        ax.plot(wavelengths_nm, values, color=colour, label=f"{label}, peak {peak:.0f} nm")
+        out[vision] = {
+            "wavelengths_nm": wavelengths_nm,
+            "values": values,
+            "efficacy": efficacy,
+            "efficacy_curve": efficacy * values,
+            "peak_nm": float(wavelengths_nm[values == values.max()].mean()),
+        }
+    return out
+
+
+@figure("fig_2_luminous_efficiency")
+def fig_2_luminous_efficiency(out_dir, *, smoke: bool = False):
+    """CIE photopic V(lambda) and scotopic V'(lambda), and the spectral luminous efficacy K V.
+
+    The data are `luminous_efficiency_data()`.
+    """
+    import matplotlib.pyplot as plt
+
+    data = luminous_efficiency_data()
+    fig, (ax, ax_k) = plt.subplots(1, 2, figsize=(10.0, 3.8), layout="constrained")
+    curves = [
+        ("photopic", r"photopic $V(\lambda)$ (CIE 1924)", "$K_m$", "tab:green"),
+        ("scotopic", r"scotopic $V'(\lambda)$ (CIE 1951)", "$K'_m$", "tab:blue"),
+    ]
+    for vision, label, symbol, colour in curves:
+        d = data[vision]
+        wavelengths_nm, peak = d["wavelengths_nm"], d["peak_nm"]
+        ax.plot(wavelengths_nm, d["values"], color=colour, label=f"{label}, peak {peak:.0f} nm")
         ax.axvline(peak, color=colour, lw=0.6, ls=":")
         ax_k.plot(
-            wavelengths_nm, efficacy * values, color=colour, label=f"{symbol} = {efficacy:g} lm/W"
+            wavelengths_nm,
+            d["efficacy_curve"],
+            color=colour,
+            label=f"{symbol} = {d['efficacy']:g} lm/W",
         )
     ax.set_xlabel("wavelength [nm]")
     ax.set_ylabel("spectral luminous efficiency [-]")
