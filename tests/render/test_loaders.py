@@ -1,10 +1,13 @@
 """Mesh files and the Mitsuba 3 XML subset, checked against Mitsuba itself."""
 
+import json
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import radiometria.render as rr
 from radiometria.radiometry import BlackbodySpectrum
 from radiometria.render import LinearRGB, SceneError, load_mesh, load_mitsuba_xml, load_scene
 
@@ -225,3 +228,44 @@ def test_load_mesh_obj_and_ply(tmp_path, suffix):
     bad.write_text("this is not a mesh\n")
     with pytest.raises(SceneError, match=f"bad.{suffix}"):
         load_mesh(bad)
+
+
+def test_binary_scene_file_is_named(tmp_path):
+    bad = tmp_path / "garbage.xml"
+    bad.write_bytes(b"\xa6\x00\x01\xffbinary")
+    with pytest.raises(SceneError, match=r"garbage\.xml: not UTF-8 text"):
+        load_scene(bad)
+    bad_json = tmp_path / "garbage.json"
+    bad_json.write_bytes(b"\xa6\x00\x01\xffbinary")
+    with pytest.raises(SceneError, match=r"garbage\.json: not UTF-8 text"):
+        load_scene(bad_json)
+
+
+@pytest.mark.parametrize(
+    "value", ["1, -2, 1", "1, nan, 1", "400:0.5, 500:-0.1"], ids=["negative", "nan", "spectrum"]
+)
+def test_bad_emitter_radiance_names_file_line_and_parameter(tmp_path, value):
+    tag = "spectrum" if ":" in value else "rgb"
+    xml = (
+        '<scene version="3.0.0">\n  <shape type="rectangle">\n'
+        f'    <emitter type="area"><{tag} name="radiance" value="{value}"/></emitter>\n'
+        "  </shape>\n</scene>"
+    )
+    path = tmp_path / "lamp.xml"
+    path.write_text(xml)
+    pattern = (
+        r"lamp\.xml:3: (parameter 'radiance': .*finite and >= 0|<rgb name='radiance'>: non-fin)"
+    )
+    with pytest.raises(SceneError, match=pattern):
+        load_scene(path)
+
+
+def test_bad_json_reflectance_names_the_field(tmp_path):
+    data = json.loads((Path(rr.__file__).parent / "data" / "cornell_box.json").read_text())
+    name = next(iter(data["materials"]))
+    key = next(k for k in data["materials"][name] if k != "type")
+    data["materials"][name][key] = [0.5, -0.1, 0.2]
+    path = tmp_path / "box.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(SceneError, match=rf"box\.json: field 'materials\.{name}\.{key}'"):
+        load_scene(path)

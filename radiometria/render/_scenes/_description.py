@@ -17,6 +17,7 @@ error in an emitter (a light must have a positive area on every triangle).
 """
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 
@@ -25,6 +26,8 @@ from .._geometry._mesh import TriangleMesh, _areas, validate_triangles
 from .._spectral import SpectralValue
 
 __all__ = [
+    "check_spectral_values",
+    "read_scene_text",
     "AreaEmitter",
     "CameraDescription",
     "FilmDescription",
@@ -34,6 +37,25 @@ __all__ = [
 ]
 
 FOV_AXES = ("x", "y", "diagonal", "smaller", "larger")
+
+
+def read_scene_text(path: Path) -> str:
+    """A scene file's text: `FileNotFoundError` naming a missing file, `SceneError` naming a
+    file that is not UTF-8 text (a binary file given as a scene)."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"scene file not found: {path}") from None
+    except UnicodeDecodeError as e:
+        raise SceneError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start}).") from None
+
+
+def check_spectral_values(values, what: str) -> None:
+    """Spectral parameters (reflectances, radiances, indices, factors) are finite and >= 0;
+    `what` names the file, line or field, and the parameter."""
+    v = np.asarray(values, np.float64)
+    if not np.all(np.isfinite(v)) or np.any(v < 0):
+        raise SceneError(f"{what}: values must be finite and >= 0, got {v.tolist()}.")
 
 
 class SceneError(ValueError):

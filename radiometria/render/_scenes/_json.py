@@ -25,6 +25,7 @@ from ._description import (
     SceneError,
     ShapeDescription,
     assemble,
+    check_spectral_values,
     look_at_matrix,
 )
 from ._measured import orient_measured
@@ -168,7 +169,17 @@ def _json_material_type(text: str, node: _Json) -> str:
 
 
 def _json_spectrum(node: _Json, spectra: _Json | None, grid: np.ndarray | None) -> SpectralValue:
-    """A spectral value: an rgb list, a {wavelengths_nm, values} object, or a name in `spectra`."""
+    """A spectral value: an rgb list, a {wavelengths_nm, values} object, or a name in `spectra`;
+    its values must be finite and >= 0 (the error names the file and the field)."""
+    value = _parse_json_spectrum(node, spectra, grid)
+    samples = value.rgb if isinstance(value, LinearRGB) else value.values
+    check_spectral_values(samples, f"{node.file}: field '{node.path}'")
+    return value
+
+
+def _parse_json_spectrum(
+    node: _Json, spectra: _Json | None, grid: np.ndarray | None
+) -> SpectralValue:
     v = node.value
     if isinstance(v, str):
         if spectra is None or not spectra.has(v):
@@ -251,7 +262,7 @@ def load_json(text: str, file: str, *, measured_fixups: bool = False) -> SceneDe
             e = s["emitter"]
             if isinstance(e.value, dict):
                 if e.has("radiance_linear_srgb"):
-                    rad = LinearRGB(e["radiance_linear_srgb"].array((3,)))
+                    rad = _json_spectrum(e["radiance_linear_srgb"], None, None)
                 else:
                     rad = _json_spectrum(e["radiance"], spectra, None)
                 two = "two-sided" in str(e.value.get("type", "")).lower()

@@ -16,7 +16,7 @@ import dataclasses
 from importlib import resources
 from pathlib import Path
 
-from ._description import SceneDescription, SceneError
+from ._description import SceneDescription, read_scene_text
 from ._json import load_json
 from ._mitsuba_xml import load_mitsuba_xml
 
@@ -26,15 +26,6 @@ BUILTIN_SCENES = {
     "cornell-box": "cornell_box.json",
     "cornell-box-measured": "cornell_box_measured.json",
 }
-
-
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"scene file not found: {path}") from None
-    except UnicodeDecodeError as e:
-        raise SceneError(f"{path}: not UTF-8 text ({e.reason} at byte {e.start}).") from None
 
 
 def load_scene(name_or_path, *, params: dict | None = None) -> SceneDescription:
@@ -70,7 +61,7 @@ def load_scene(name_or_path, *, params: dict | None = None) -> SceneDescription:
     path = Path(name_or_path)
     suffix = path.suffix.lower()
     if suffix == ".json":
-        return load_json(_read_text(path), str(path))
+        return load_json(read_scene_text(path), str(path))
     if suffix == ".xml":
         return load_mitsuba_xml(path, params=params)
     raise ValueError(

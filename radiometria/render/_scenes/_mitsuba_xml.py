@@ -48,7 +48,9 @@ from ._description import (
     SceneError,
     ShapeDescription,
     assemble,
+    check_spectral_values,
     look_at_matrix,
+    read_scene_text,
 )
 from ._mesh_files import read_mesh
 
@@ -105,7 +107,8 @@ class _Ctx:
         self.refs: dict[str, tuple[_Node, object]] = {}
 
     def err(self, node: _Node, msg: str) -> SceneError:
-        return SceneError(f"{self.file}:{node.line}: <{node.tag}>: {msg}")
+        name = f" name='{node.attrib['name']}'" if "name" in node.attrib else ""
+        return SceneError(f"{self.file}:{node.line}: <{node.tag}{name}>: {msg}")
 
     def attr(self, node: _Node, key: str, default=None) -> str:
         if key not in node.attrib:
@@ -197,7 +200,24 @@ def _transform(ctx: _Ctx, node: _Node) -> np.ndarray:
 
 
 def _spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
-    """rgb / spectrum / blackbody / float property -> a typed spectral value."""
+    """rgb / spectrum / blackbody / float property -> a typed spectral value. Spectra (rgb,
+    spectrum, blackbody) must be finite and >= 0: the error names the file, the line and the
+    parameter. (A plain float may be negative, e.g. a principal point offset.)"""
+    value = _parse_spectrum_value(ctx, node)
+    if node.tag == "float":
+        return value
+    if isinstance(value, LinearRGB | float):
+        samples = value.rgb if isinstance(value, LinearRGB) else value
+    elif isinstance(value, PiecewiseLinearSpectrum):
+        samples = value.values
+    else:
+        samples = value.scale
+    where = f"{ctx.file}:{node.line}: parameter '{node.attrib.get('name', node.tag)}'"
+    check_spectral_values(samples, where)
+    return value
+
+
+def _parse_spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
     if node.tag == "rgb":
         text = ctx.attr(node, "value").strip()
         if text.startswith("#") and len(text) == 7:
@@ -537,10 +557,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         Ch. 8 (scene description); Mitsuba 3's scene format (`Jakob2022`).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"scene file not found: {path}") from None
+    text = read_scene_text(path)
     file = str(path)
     root = _parse_xml(text, file)
     ctx = _Ctx(file, path.parent, {})
