@@ -159,3 +159,7 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, TypeError, OSError) as err:
         print(f"radiometria: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # Ctrl-C: stop without a traceback (128 + SIGINT, the shell's convention).
+        print("radiometria: interrupted", file=sys.stderr)
+        return 130

@@ -146,3 +146,23 @@ def test_cpu_devices_must_be_positive(capsys):
         main(["--cpu-devices", "0", "figures", "--out", "unused"])
     assert exc.value.code == 2
     assert "--cpu-devices" in capsys.readouterr().err
+
+
+def test_ctrl_c_exits_130_without_traceback(tmp_path):
+    """SIGINT during a render: a one-line message and exit status 130, no Python traceback."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "radiometria", "render", "cornell-box", "--spp", "100000",
+         "--width", "64", "--height", "64", "--out", str(tmp_path / "x.exr")],
+        stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    time.sleep(8.0)  # past start-up, inside the render
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "radiometria: interrupted" in err
+    assert not (tmp_path / "x.exr").exists()
