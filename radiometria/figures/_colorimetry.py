@@ -123,16 +123,61 @@ def _horseshoe_image(locus: np.ndarray, n: int) -> np.ndarray:
     return rgba.reshape(n, n, 4)
 
 
+_ISOTEMPERATURE_CCTS = (1500.0, 2000.0, 3000.0, 4000.0, 6500.0, 10000.0)  # [K]
+_GAMUTS = ("sRGB", "Display P3", "ITU-R BT.2020")
+_TABLE_2_1_ILLUMINANTS = ("A", "D50", "E", "D55", "D65")
+
+
+def chromaticity_figure_data(*, smoke: bool = False) -> dict:
+    """What fig. 2.2 plots, computed with `radiometria.colorimetry`.
+
+    - `locus_wavelengths_nm` (421,), 360-780 nm, and `locus` (421, 2): the spectral locus,
+        the xy of the CIE 1931 2° CMFs (`get_cmfs()`);
+    - `image` (n, n, 4): the diagram filled with normalised, gamut-clipped sRGB colours, alpha
+        1 inside the locus (n = 120 in smoke mode, else 500) on [0, 0.8] x [0, 0.9];
+    - `planck_cct` (m,), 1000-100000 K, and `planck_xy` (m, 2) = `CCT_to_xy` (Duv = 0);
+    - `isotemperature`: `{cct: (duv, xy)}`, the lines of constant CCT for Duv in
+        [-0.02, 0.02] (11 points, `UCS_uv_to_xy(CCT_to_uv(cct, duv))`);
+    - `gamuts`: `{name: primaries (3, 2)}` for sRGB, Display P3 and ITU-R BT.2020;
+    - `illuminants`: `{name: xy (2,)}` for A, D50, E, D55 and D65 (thesis table 2.1), from
+        their tabulated SPDs on 360 nm and up (emissive XYZ, `sd_to_XYZ`, 2° observer).
+    """
+    locus = _spectral_locus_xy()
+    T = np.geomspace(1000.0, 100000.0, 60 if smoke else 300)
+    isotemperature = {}
+    for t in _ISOTEMPERATURE_CCTS:
+        duv = np.linspace(-0.02, 0.02, 11)
+        xy = np.asarray(UCS_uv_to_xy(CCT_to_uv(np.full_like(duv, t), duv)))
+        isotemperature[t] = (duv, xy)
+    illuminants = {}
+    for name in _TABLE_2_1_ILLUMINANTS:
+        s = get_illuminant(name)
+        wl, v = np.asarray(s.wavelengths_nm), np.asarray(s.values)
+        keep = wl >= VISIBLE_WAVELENGTH_MIN_NM
+        illuminants[name] = np.asarray(XYZ_to_xy(sd_to_XYZ(v[keep], wl[keep])))
+    return {
+        "locus_wavelengths_nm": np.arange(360.0, 781.0),
+        "locus": locus,
+        "image": _horseshoe_image(locus, 120 if smoke else 500),
+        "planck_cct": T,
+        "planck_xy": np.asarray(CCT_to_xy(T)),
+        "isotemperature": isotemperature,
+        "gamuts": {name: np.asarray(RGB_COLOURSPACES[name].primaries) for name in _GAMUTS},
+        "illuminants": illuminants,
+    }
+
+
 @figure("fig_2_2_chromaticity")
 def fig_2_2_chromaticity(out_dir, *, smoke: bool = False):
     """CIE 1931 xy chromaticity diagram: spectral locus, Planckian locus with isotemperature
     lines, the sRGB / Display P3 / Rec.2020 gamuts and the illuminants of thesis table 2.1
-    (thesis fig. 2.2 and 2.3)."""
+    (thesis fig. 2.2 and 2.3). The data are `chromaticity_figure_data()`."""
     import matplotlib.pyplot as plt
 
-    locus = _spectral_locus_xy()
+    data = chromaticity_figure_data(smoke=smoke)
+    locus = data["locus"]
     fig, ax = plt.subplots(figsize=(6.6, 7.0))
-    img = _horseshoe_image(locus, 120 if smoke else 500)
+    img = data["image"]
     ax.imshow(img, origin="lower", extent=(0.0, 0.8, 0.0, 0.9), interpolation="bilinear", zorder=0)
     ax.plot(*np.vstack([locus, locus[:1]]).T, color="k", lw=1.2, zorder=2)
     for wl in (460, 480, 490, 500, 510, 520, 540, 560, 580, 600, 620, 700):
@@ -147,19 +192,16 @@ def fig_2_2_chromaticity(out_dir, *, smoke: bool = False):
         )
 
     # Planckian locus, 1000 K to 100000 K (approaching the infinite-temperature point).
-    T = np.geomspace(1000.0, 100000.0, 60 if smoke else 300)
-    pl = np.asarray(CCT_to_xy(T))
+    pl = data["planck_xy"]
     ax.plot(pl[:, 0], pl[:, 1], color="k", lw=1.6, zorder=4, label="Planckian locus")
     # Isotemperature lines: constant CCT, Duv in [-0.02, 0.02] (normals in CIE 1960 uv).
-    for t in (1500.0, 2000.0, 3000.0, 4000.0, 6500.0, 10000.0):
-        duv = np.linspace(-0.02, 0.02, 11)
-        line = np.asarray(UCS_uv_to_xy(CCT_to_uv(np.full_like(duv, t), duv)))
+    for t, (_, line) in data["isotemperature"].items():
         ax.plot(line[:, 0], line[:, 1], color="k", lw=0.7, zorder=4)
         ax.annotate(f"{t:.0f} K", line[0], fontsize=6, textcoords="offset points", xytext=(-8, -9))
 
     styles = {"sRGB": "w-", "Display P3": "w--", "ITU-R BT.2020": "w:"}
     for name, style in styles.items():
-        p = np.asarray(RGB_COLOURSPACES[name].primaries)
+        p = data["gamuts"][name]
         tri = np.vstack([p, p[:1]])
         ax.plot(tri[:, 0], tri[:, 1], style, lw=1.4, zorder=5)
         ax.plot(tri[:, 0], tri[:, 1], "k" + style[1:], lw=0.6, zorder=5, label=name)
@@ -172,10 +214,7 @@ def fig_2_2_chromaticity(out_dir, *, smoke: bool = False):
         ("D55", (6, -4)),
         ("D65", (-27, 2)),
     ]:
-        s = get_illuminant(name)
-        wl, v = np.asarray(s.wavelengths_nm), np.asarray(s.values)
-        keep = wl >= VISIBLE_WAVELENGTH_MIN_NM
-        xy = np.asarray(XYZ_to_xy(sd_to_XYZ(v[keep], wl[keep])))
+        xy = data["illuminants"][name]
         ax.plot(*xy, "o", mfc="w", mec="k", ms=4, zorder=6)
         ax.annotate(name, xy, textcoords="offset points", xytext=offset, fontsize=8, zorder=6)
 
