@@ -26,29 +26,54 @@ from ..scattering import (
 from ._registry import figure, save
 
 
+def fresnel_dielectric_data(*, smoke: bool = False) -> dict:
+    """What the dielectric Fresnel figure plots, from `fresnel_dielectric_polarized` and
+    `fresnel_dielectric` for glass, $\\eta = 1.5$.
+
+    `theta` (n,) on $[0, \\pi/2]$ [rad] (n = 181 in smoke mode, else 901), `eta` = 1.5, and
+    for `"outside"` (air to glass, $\\cos\\theta_i > 0$) and `"inside"` (glass to air, the
+    same angles with $\\cos\\theta_i < 0$) a dict with `R_s`, `R_p` (s and p reflectances)
+    and `F` (unpolarised) (n,) [dimensionless], `brewster` = $\\arctan\\eta_t/\\eta_i$ [deg]
+    and, inside, `critical` = $\\arcsin(1/\\eta)$ [deg].
+    """
+    n = 181 if smoke else 901
+    eta = 1.5
+    theta = np.linspace(0.0, np.pi / 2, n)
+    out = {"theta": theta, "eta": eta}
+    for side in ("outside", "inside"):
+        cos = np.cos(theta) if side == "outside" else -np.cos(theta)
+        R_s, R_p = (np.asarray(x) for x in fresnel_dielectric_polarized(cos, eta))
+        rel = eta if side == "outside" else 1.0 / eta
+        out[side] = {
+            "R_s": R_s,
+            "R_p": R_p,
+            "F": np.asarray(fresnel_dielectric(cos, eta)),
+            "brewster": float(np.degrees(np.arctan(rel))),
+        }
+    out["inside"]["critical"] = float(np.degrees(np.arcsin(1.0 / eta)))
+    return out
+
+
 @figure("fig_3_fresnel_dielectric")
 def fig_3_fresnel_dielectric(out_dir, *, smoke: bool = False):
     """Fresnel reflectance of glass (eta = 1.5) vs angle: s, p, unpolarised; Brewster's angle.
 
     Thesis eq. 3.13-3.18 with kappa = 0; the right panel is the same interface seen from inside
-    the glass (eta = 1/1.5), with total internal reflection beyond the critical angle.
+    the glass (eta = 1/1.5), with total internal reflection beyond the critical angle. The
+    data are `fresnel_dielectric_data()`.
     """
     import matplotlib.pyplot as plt
 
-    n = 181 if smoke else 901
-    eta = 1.5
-    theta = np.linspace(0.0, np.pi / 2, n)
+    data = fresnel_dielectric_data(smoke=smoke)
+    theta = data["theta"]
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
     for ax, side in zip(axes, ("outside", "inside"), strict=True):
-        cos = np.cos(theta) if side == "outside" else -np.cos(theta)
-        R_s, R_p = (np.asarray(x) for x in fresnel_dielectric_polarized(cos, eta))
-        F = np.asarray(fresnel_dielectric(cos, eta))
+        R_s, R_p, F = (data[side][k] for k in ("R_s", "R_p", "F"))
         deg = np.degrees(theta)
         ax.plot(deg, R_s, label=r"$\bar\rho_\perp$ (s)", color="tab:blue")
         ax.plot(deg, R_p, label=r"$\bar\rho_\parallel$ (p)", color="tab:red")
         ax.plot(deg, F, label=r"$F_r$ (unpolarised)", color="k", lw=2)
-        rel = eta if side == "outside" else 1.0 / eta
-        theta_b = np.degrees(np.arctan(rel))
+        theta_b = data[side]["brewster"]
         ax.axvline(theta_b, color="0.5", ls="--", lw=1)
         ax.annotate(
             f"Brewster {theta_b:.1f}°",
@@ -59,7 +84,7 @@ def fig_3_fresnel_dielectric(out_dir, *, smoke: bool = False):
             fontsize=8,
         )
         if side == "inside":
-            theta_c = np.degrees(np.arcsin(1.0 / eta))
+            theta_c = data["inside"]["critical"]
             ax.axvline(theta_c, color="0.3", ls=":", lw=1)
             ax.annotate(
                 f"critical angle {theta_c:.1f}°: total internal reflection",
@@ -90,36 +115,62 @@ def _srgb_of_reflectance(wl: np.ndarray, reflectance: np.ndarray) -> np.ndarray:
     return np.clip(np.asarray(XYZ_to_sRGB(xyz)), 0.0, 1.0)
 
 
+_METALS = [("Au", "gold", "goldenrod"), ("Ag", "silver", "0.5"), ("Cu", "copper", "chocolate")]
+_METALS.append(("Al", "aluminium", "steelblue"))
+
+
+def fresnel_conductors_data(*, smoke: bool = False) -> dict:
+    """What the metals figure plots, from `conductor_ior` and `fresnel_conductor`.
+
+    `wavelengths_nm` (n,), 360-830 nm (n = 95 in smoke mode, else 471) [nm]; `theta` (m,) on
+    $[0, \\pi/2]$ (m = 91 or 361) [rad]; and `metals`, `{symbol: dict}` for Au, Ag, Cu and Al
+    with `name`, `eta`, `k` (n,), the tabulated optical constants [dimensionless], `R` (n,),
+    the normal-incidence reflectance, `rgb` (3,), its gamma-encoded sRGB colour under D65,
+    clipped to [0, 1], `eta_550`, `k_550` and `F_550` (m,), the reflectance against the
+    angle of incidence at 550 nm.
+    """
+    wl = np.linspace(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM, 95 if smoke else 471)
+    theta = np.linspace(0, np.pi / 2, 91 if smoke else 361)
+    metals = {}
+    for sym, name, _ in _METALS:
+        eta, k = (np.asarray(x) for x in conductor_ior(sym, wl))
+        R = np.asarray(fresnel_conductor(1.0, eta, k))
+        e550, k550 = (np.asarray(x) for x in conductor_ior(sym, 550.0))
+        metals[sym] = {
+            "name": name,
+            "eta": eta,
+            "k": k,
+            "R": R,
+            "rgb": _srgb_of_reflectance(wl, R),
+            "eta_550": float(e550),
+            "k_550": float(k550),
+            "F_550": np.asarray(fresnel_conductor(np.cos(theta), e550, k550)),
+        }
+    return {"wavelengths_nm": wl, "theta": theta, "metals": metals}
+
+
 @figure("fig_3_fresnel_conductors")
 def fig_3_fresnel_conductors(out_dir, *, smoke: bool = False):
     """Gold, silver, copper (and aluminium): spectral eta, k, normal-incidence reflectance, colour.
 
     Tabulated optical constants (`radiometria.scattering.conductor_ior`), thesis eq. 3.13-3.18;
-    the swatches are the sRGB colour of the normal-incidence reflectance under D65.
+    the swatches are the sRGB colour of the normal-incidence reflectance under D65. The data
+    are `fresnel_conductors_data()`.
     """
     import matplotlib.pyplot as plt
 
-    wl = np.linspace(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM, 95 if smoke else 471)
-    metals = [("Au", "gold", "goldenrod"), ("Ag", "silver", "0.5"), ("Cu", "copper", "chocolate")]
-    metals.append(("Al", "aluminium", "steelblue"))
+    data = fresnel_conductors_data(smoke=smoke)
+    wl, theta = data["wavelengths_nm"], data["theta"]
     fig, axes = plt.subplots(1, 3, figsize=(13.0, 4.0))
-    theta = np.linspace(0, np.pi / 2, 91 if smoke else 361)
-    for sym, name, colour in metals:
-        eta, k = (np.asarray(x) for x in conductor_ior(sym, wl))
-        axes[0].plot(wl, eta, color=colour, label=rf"{name} $\eta$")
-        axes[0].plot(wl, k, color=colour, ls="--", label=rf"{name} $k$")
-        R = np.asarray(fresnel_conductor(1.0, eta, k))
-        rgb = _srgb_of_reflectance(wl, R)
-        axes[1].plot(wl, R, color=colour, lw=2, label=name)
-        e550, k550 = (np.asarray(x) for x in conductor_ior(sym, 550.0))
-        axes[2].plot(
-            np.degrees(theta),
-            np.asarray(fresnel_conductor(np.cos(theta), e550, k550)),
-            color=colour,
-            label=f"{name} (550 nm)",
+    for idx, (sym, name, colour) in enumerate(_METALS):
+        m = data["metals"][sym]
+        axes[0].plot(wl, m["eta"], color=colour, label=rf"{name} $\eta$")
+        axes[0].plot(wl, m["k"], color=colour, ls="--", label=rf"{name} $k$")
+        axes[1].plot(wl, m["R"], color=colour, lw=2, label=name)
+        axes[2].plot(np.degrees(theta), m["F_550"], color=colour, label=f"{name} (550 nm)")
+        axes[1].add_patch(
+            plt.Rectangle((640.0, 0.05 + 0.1 * idx), 35, 0.08, color=m["rgb"], ec="k")
         )
-        idx = [m[0] for m in metals].index(sym)
-        axes[1].add_patch(plt.Rectangle((640.0, 0.05 + 0.1 * idx), 35, 0.08, color=rgb, ec="k"))
         axes[1].annotate(name, (680.0, 0.09 + 0.1 * idx), fontsize=7, va="center")
     axes[0].set_xlabel("wavelength [nm]")
     axes[0].set_ylabel(r"optical constants $\eta$, $k$")
@@ -142,33 +193,58 @@ def fig_3_fresnel_conductors(out_dir, *, smoke: bool = False):
     return save(fig, out_dir, "fig_3_fresnel_conductors")
 
 
-@figure("fig_3_brdf_lobes")
-def fig_3_brdf_lobes(out_dir, *, smoke: bool = False):
-    """Polar plots of f cos(theta_o) in the plane of incidence for GGX conductors and Lambert.
+_LOBE_ALPHAS = (0.05, 0.1, 0.2, 0.4, 0.7)
 
-    Incidence at 45 degrees; rough conductor (`RoughConductorBxDF`, unit Fresnel term) for
-    several roughnesses, the Lambertian lobe for reference (thesis fig. 3.1 categories).
+
+def brdf_lobes_data(*, smoke: bool = False) -> dict:
+    """What the BRDF lobes figure plots: $f(\\omega_o, \\omega_i)\\cos\\theta_o$ in the plane of
+    incidence for light from $\\omega_i$, $45°$ off the normal.
+
+    `theta_i` [rad]; `wi` (3,) = $(-\\sin\\theta_i, 0, \\cos\\theta_i)$; `t` (n,) on
+    $[-\\pi/2, \\pi/2]$, the signed polar angle of $\\omega_o = (\\sin t, 0, \\cos t)$ [rad]
+    (n = 361 in smoke mode, else 1441); `ggx`, `{alpha: (n,)}` for `RoughConductorBxDF(alpha,
+    1, 1e4)` (GGX, unit Fresnel term) [sr^-1], plotted divided by their maxima; `diffuse`,
+    `[(label, colour, (n,))]` for `DiffuseBxDF(1)` and `OrenNayarBxDF(1, sigma)`, sigma 0.5
+    and 1 rad [sr^-1].
     """
-    import matplotlib.pyplot as plt
-
     theta_i = np.radians(45.0)
-    wi = jnp.array([-np.sin(theta_i), 0.0, np.cos(theta_i)])
+    wi = np.array([-np.sin(theta_i), 0.0, np.cos(theta_i)])
     t = np.linspace(-np.pi / 2, np.pi / 2, 361 if smoke else 1441)
     wo = jnp.asarray(np.stack([np.sin(t), np.zeros_like(t), np.cos(t)], -1))
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.6), subplot_kw={"projection": "polar"})
-    cmap = plt.cm.viridis
-    alphas = [0.05, 0.1, 0.2, 0.4, 0.7]
-    for j, a in enumerate(alphas):
+    ggx = {}
+    for a in _LOBE_ALPHAS:
         b = RoughConductorBxDF(a, 1.0, 1e4)
-        v = np.asarray(b.f(wo, wi))[:, 0] * np.cos(t)
-        axes[0].plot(t, v / v.max(), color=cmap(j / (len(alphas) - 1)), label=rf"$\alpha$ = {a}")
-    axes[0].set_title(r"GGX conductor, $f\cos\theta_o$ (normalised)", fontsize=10)
+        ggx[a] = np.asarray(b.f(wo, jnp.asarray(wi)))[:, 0] * np.cos(t)
+    diffuse = []
     for b, label, c in [
         (DiffuseBxDF(1.0), "Lambert", "k"),
         (OrenNayarBxDF(1.0, 0.5), r"Oren-Nayar $\sigma$ = 0.5", "tab:red"),
         (OrenNayarBxDF(1.0, 1.0), r"Oren-Nayar $\sigma$ = 1", "tab:orange"),
     ]:
-        v = np.asarray(b.f(wo, wi))[:, 0] * np.cos(t)
+        diffuse.append((label, c, np.asarray(b.f(wo, jnp.asarray(wi)))[:, 0] * np.cos(t)))
+    return {"theta_i": theta_i, "wi": wi, "t": t, "ggx": ggx, "diffuse": diffuse}
+
+
+@figure("fig_3_brdf_lobes")
+def fig_3_brdf_lobes(out_dir, *, smoke: bool = False):
+    """Polar plots of f cos(theta_o) in the plane of incidence for GGX conductors and Lambert.
+
+    Incidence at 45 degrees; rough conductor (`RoughConductorBxDF`, unit Fresnel term) for
+    several roughnesses, the Lambertian lobe for reference (thesis fig. 3.1 categories). The
+    data are `brdf_lobes_data()`.
+    """
+    import matplotlib.pyplot as plt
+
+    data = brdf_lobes_data(smoke=smoke)
+    theta_i, t = data["theta_i"], data["t"]
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.6), subplot_kw={"projection": "polar"})
+    cmap = plt.cm.viridis
+    alphas = list(data["ggx"])
+    for j, a in enumerate(alphas):
+        v = data["ggx"][a]
+        axes[0].plot(t, v / v.max(), color=cmap(j / (len(alphas) - 1)), label=rf"$\alpha$ = {a}")
+    axes[0].set_title(r"GGX conductor, $f\cos\theta_o$ (normalised)", fontsize=10)
+    for label, c, v in data["diffuse"]:
         axes[1].plot(t, v, color=c, label=label)
     axes[1].set_title(r"diffuse lobes, $f\cos\theta_o$ [sr$^{-1}$]", fontsize=10)
     for ax in axes:
@@ -186,19 +262,20 @@ def fig_3_brdf_lobes(out_dir, *, smoke: bool = False):
     return save(fig, out_dir, "fig_3_brdf_lobes")
 
 
-@figure("fig_3_albedo_roughness")
-def fig_3_albedo_roughness(out_dir, *, smoke: bool = False):
-    """Directional albedo of single-scattering GGX microfacets vs roughness: the energy loss.
+def albedo_roughness_data(*, smoke: bool = False) -> dict:
+    """What the albedo-roughness figure plots: Monte Carlo directional albedos (eq. 3.5).
 
-    White furnace: a conductor with unit Fresnel term (k -> infinity) and a dielectric
-    (eta = 1.5, reflection + transmission, importance transport); Monte Carlo estimates of
-    thesis eq. 3.5 with their 2-sigma error bars (`hemispherical_directional_reflectance`).
+    `alphas` (a,), GGX roughness on [0.05, 1] (a = 8 in smoke mode, else 20); `mus` (3,),
+    the cosines of the outgoing direction $\\omega_o = (\\sqrt{1 - \\mu^2}, 0, \\mu)$; `n`,
+    the sample count (4096 or 131072, the same uniforms, key 3, for every point); and
+    `conductor`, `dielectric` (3, a, 2): the mean of `sample_f(...).weight()` and its
+    standard error, for `RoughConductorBxDF(alpha, 1, 1e4)` (unit Fresnel term) and
+    `RoughDielectricBxDF(alpha, 1.5)` (reflection plus transmission, importance transport)
+    [dimensionless].
     """
-    import matplotlib.pyplot as plt
-
     n = 4_096 if smoke else 131_072
     alphas = np.linspace(0.05, 1.0, 8 if smoke else 20)
-    mus = [1.0, 0.5, 0.2]
+    mus = np.array([1.0, 0.5, 0.2])
     key = jax.random.key(3)
     u = jax.random.uniform(key, (n, 3))
 
@@ -214,12 +291,34 @@ def fig_3_albedo_roughness(out_dir, *, smoke: bool = False):
         w = s.weight()[:, 0]
         return jnp.mean(w), jnp.std(w) / np.sqrt(n)
 
+    out = {"alphas": alphas, "mus": mus, "n": n}
+    for name, fn in (("conductor", albedo_conductor), ("dielectric", albedo_dielectric)):
+        res = []
+        for mu in mus:
+            wo = jnp.broadcast_to(jnp.array([np.sqrt(1 - mu * mu), 0.0, mu]), (n, 3))
+            res.append([[float(x) for x in fn(jnp.asarray(a), wo)] for a in alphas])
+        out[name] = np.array(res)
+    return out
+
+
+@figure("fig_3_albedo_roughness")
+def fig_3_albedo_roughness(out_dir, *, smoke: bool = False):
+    """Directional albedo of single-scattering GGX microfacets vs roughness: the energy loss.
+
+    White furnace: a conductor with unit Fresnel term (k -> infinity) and a dielectric
+    (eta = 1.5, reflection + transmission, importance transport); Monte Carlo estimates of
+    thesis eq. 3.5 with their 2-sigma error bars (`hemispherical_directional_reflectance`).
+    The data are `albedo_roughness_data()`.
+    """
+    import matplotlib.pyplot as plt
+
+    data = albedo_roughness_data(smoke=smoke)
+    alphas = data["alphas"]
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0), sharey=True)
     colours = ["tab:blue", "tab:green", "tab:red"]
-    for mu, c in zip(mus, colours, strict=True):
-        wo = jnp.broadcast_to(jnp.array([np.sqrt(1 - mu * mu), 0.0, mu]), (n, 3))
-        for ax, fn in zip(axes, (albedo_conductor, albedo_dielectric), strict=True):
-            res = np.array([[float(x) for x in fn(jnp.asarray(a), wo)] for a in alphas])
+    for i, (mu, c) in enumerate(zip(data["mus"], colours, strict=True)):
+        for ax, name in zip(axes, ("conductor", "dielectric"), strict=True):
+            res = data[name][i]
             ax.errorbar(
                 alphas,
                 res[:, 0],
