@@ -6,7 +6,8 @@ Subcommands:
 - `demo [--out DIR] [--spp N]`: render the Cornell box and write the figures into `./out`.
 - `lut build --space NAME --res N --out FILE`, `lut check FILE`: RGB-to-spectrum tables.
 - `render SCENE --spp N --out FILE [--width W --height H --seed S --max-depth D
-  --integrator NAME --sampler NAME]`.
+  --integrator NAME --sampler NAME --checkpoint FILE --checkpoint-every S --resume
+  --preview-every S]`.
 
 Each long task shows a progress bar on stderr (tqdm).
 """
@@ -128,6 +129,16 @@ def build_parser() -> argparse.ArgumentParser:
         "--sampler",
         default="independent",
         help="sampler plugin: 'independent' or 'sobol' (Owen-scrambled) [independent]",
+    )
+    p.add_argument(
+        "--checkpoint", default=None, help="checkpoint file [OUT.checkpoint.npz beside the output]"
+    )
+    p.add_argument(
+        "--checkpoint-every", type=float, default=60.0, help="seconds between checkpoints [60]"
+    )
+    p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
+    p.add_argument(
+        "--preview-every", type=float, default=None, help="rewrite OUT every S seconds [off]"
     )
     p.set_defaults(func=_render)
     return parser

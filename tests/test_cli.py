@@ -1,8 +1,10 @@
 """The `radiometria` command: help, `render` to EXR and PNG, and bad arguments (exit 2)."""
 
 import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -148,21 +150,70 @@ def test_cpu_devices_must_be_positive(capsys):
     assert "--cpu-devices" in capsys.readouterr().err
 
 
-def test_ctrl_c_exits_130_without_traceback(tmp_path):
-    """SIGINT during a render: a one-line message and exit status 130, no Python traceback."""
-    import signal
-    import subprocess
-    import sys
-    import time
+def _render_cli(tmp_path, *extra, out="x.exr"):
+    return [sys.executable, "-m", "radiometria", "render", "cornell-box", "--width", "16",
+            "--height", "16", "--out", str(tmp_path / out), *extra]  # fmt: skip
 
+
+def _uninterrupted(tmp_path, spp):
+    """The same command, run to the end without interruption."""
+    cmd = _render_cli(tmp_path, "--spp", str(spp), out="reference.exr")
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    return read_exr(tmp_path / "reference.exr")[0]
+
+
+def _wait_for(path, proc, timeout=240.0):
+    t0 = time.monotonic()
+    while not path.exists():
+        assert proc.poll() is None, proc.communicate()[1]
+        assert time.monotonic() - t0 < timeout, "no checkpoint appeared"
+        time.sleep(0.05)
+
+
+@pytest.mark.slow
+def test_ctrl_c_writes_checkpoint_and_partial_image_then_resume_is_bit_identical(tmp_path):
+    """SIGINT mid-render: exit 130 with a one-line message (no traceback), a partial image
+    whose EXR metadata records the spp reached, and a checkpoint; resuming from it gives the
+    uninterrupted image bit for bit."""
+    spp = 8192
+    ck = tmp_path / "x.exr.checkpoint.npz"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "radiometria", "render", "cornell-box", "--spp", "100000",
-         "--width", "64", "--height", "64", "--out", str(tmp_path / "x.exr")],
+        _render_cli(tmp_path, "--spp", str(spp), "--checkpoint-every", "0"),
         stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
-    time.sleep(8.0)  # past start-up, inside the render
+    _wait_for(ck, proc)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
-    assert "Traceback" not in err and "radiometria: interrupted" in err
-    assert not (tmp_path / "x.exr").exists()
+    assert "Traceback" not in err and "interrupted by SIGINT" in err and "--resume" in err
+    _, meta = read_exr(tmp_path / "x.exr")
+    assert 0 < int(meta["spp_reached"]) < spp and ck.exists()
+    done = subprocess.run(_render_cli(tmp_path, "--spp", str(spp), "--resume"),
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    image, meta = read_exr(tmp_path / "x.exr")
+    assert int(meta["spp_reached"]) == spp and not ck.exists()
+    np.testing.assert_array_equal(image, _uninterrupted(tmp_path, spp))
+
+
+@pytest.mark.slow
+def test_sigkill_then_resume_is_bit_identical(tmp_path):
+    """A render killed with SIGKILL (no chance to clean up) resumes from its last atomic
+    checkpoint to the uninterrupted image, bit for bit; another spp is refused."""
+    spp = 8192
+    ck = tmp_path / "run.npz"
+    args = ("--spp", str(spp), "--checkpoint", str(ck), "--checkpoint-every", "0")
+    proc = subprocess.Popen(_render_cli(tmp_path, *args), stderr=subprocess.PIPE, text=True)
+    _wait_for(ck, proc)
+    proc.kill()
+    proc.communicate(timeout=60)
+    cmd = _render_cli(tmp_path, "--spp", "16", "--checkpoint", str(ck), "--resume")
+    wrong = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert wrong.returncode == 2 and "belongs to another render" in wrong.stderr
+    assert "spp: 8192 in the file, 16 now" in wrong.stderr
+    done = subprocess.run(_render_cli(tmp_path, *args, "--resume"),
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    image, _ = read_exr(tmp_path / "x.exr")
+    np.testing.assert_array_equal(image, _uninterrupted(tmp_path, spp))

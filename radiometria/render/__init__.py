@@ -24,7 +24,8 @@ from ._accelerators import (
     BVHAccelerator as BVHAccelerator,
     build_accelerator as build_accelerator,
 )
-from ._driver import render as render
+from ._checkpoint import CheckpointError as CheckpointError
+from ._driver import RenderInterrupted as RenderInterrupted, render as render
 from ._geometry import (
     BVH as BVH,
     AbstractTraversalBackend as AbstractTraversalBackend,

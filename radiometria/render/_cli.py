@@ -8,11 +8,12 @@ channels R, G, B; `.png` is 8-bit sRGB-encoded) and whether the output can be wr
 import argparse
 import importlib.metadata
 import os
+import sys
 import tempfile
 from pathlib import Path
 
 from ..camera import write_exr, write_png
-from ._driver import render
+from ._driver import RenderInterrupted, render
 from ._integrators import AbstractIntegrator
 from ._registry import INTEGRATORS, SAMPLERS
 from ._scenes import load_scene
@@ -87,7 +88,10 @@ def _render_to(
     integrator=None,
     sampler="independent",
     progress=True,
+    **long_render,
 ):
+    """Render a scene as the command line does; `long_render` are `render`'s checkpoint and
+    preview arguments."""
     if sampler not in SAMPLERS:
         raise ValueError(f"--sampler must be one of {sorted(SAMPLERS)}, got {sampler!r}.")
     description = load_scene(scene_name)
@@ -101,6 +105,7 @@ def _render_to(
         integrator=chosen,
         sampler=SAMPLERS[sampler](),
         progress=progress,
+        **long_render,
     )
     metadata = {
         "software": f"radiometria {importlib.metadata.version('radiometria')}",
@@ -120,7 +125,11 @@ def render_command(args: argparse.Namespace) -> int:
     """Run `radiometria render SCENE --spp N --out FILE [...]`; return the exit status.
 
     Bad arguments raise `ValueError`, `TypeError` or `OSError` (the command turns them into
-    exit status 2 with the message) before anything is rendered.
+    exit status 2 with the message) before anything is rendered. Long renders write a
+    checkpoint (`--checkpoint`, default `OUT.checkpoint.npz`) every `--checkpoint-every`
+    seconds; `--resume` continues from it, bit for bit. SIGINT or SIGTERM stop after the step
+    in flight: the checkpoint and the partial image (EXR metadata `spp_reached`) are written,
+    and the command exits with 130 or 143 without a traceback.
     """
     spp = _check_int(args.spp, "spp", 1)
     width = _check_int(args.width, "width", 1, MAX_IMAGE_SIDE)
@@ -128,17 +137,48 @@ def render_command(args: argparse.Namespace) -> int:
     seed = _check_int(args.seed, "seed", 0, 2**31 - 1)
     max_depth = _check_int(args.max_depth, "max_depth", 1, 1024)
     out = _check_output(args.out)
-    rgb, metadata = _render_to(
-        args.scene,
-        spp=spp,
-        width=width,
-        height=height,
-        seed=seed,
-        max_depth=max_depth,
-        integrator=args.integrator,
-        sampler=args.sampler,
+    for name in ("checkpoint_every", "preview_every"):
+        value = getattr(args, name)
+        if value is not None and not value >= 0:
+            raise ValueError(f"--{name.replace('_', '-')} must be >= 0 [s], got {value}.")
+    checkpoint = (
+        Path(args.checkpoint) if args.checkpoint else out.with_name(out.name + ".checkpoint.npz")
     )
-    _write(out, rgb, metadata)
+    settings = dict(scene=str(args.scene), spp=spp, seed=seed)
+
+    def preview(rgb, spp_reached):
+        _write(out, rgb, {**settings, "spp_reached": int(spp_reached)})
+
+    try:
+        rgb, metadata = _render_to(
+            args.scene,
+            spp=spp,
+            width=width,
+            height=height,
+            seed=seed,
+            max_depth=max_depth,
+            integrator=args.integrator,
+            sampler=args.sampler,
+            checkpoint=checkpoint,
+            checkpoint_every=args.checkpoint_every,
+            resume=args.resume,
+            preview=preview if args.preview_every is not None else None,
+            preview_every=args.preview_every or 0.0,
+        )
+    except RenderInterrupted as stop:
+        _write(out, stop.image, {**settings, "spp_reached": int(stop.spp_reached)})
+        where = (
+            f"; checkpoint {stop.checkpoint} (continue with --resume)" if stop.checkpoint else ""
+        )
+        print(
+            f"radiometria: interrupted by {stop.signal_name} at {stop.spp_reached} of {spp} spp; "
+            f"partial image {out}{where}",
+            file=sys.stderr,
+        )
+        return 130 if stop.signal_name == "SIGINT" else 143
+    _write(out, rgb, {**metadata, "spp_reached": int(spp)})
+    if not args.checkpoint and checkpoint.exists():
+        checkpoint.unlink()  # the default checkpoint of a finished render is not needed
     print(out)
     return 0
 

@@ -44,7 +44,10 @@ XLA's deterministic ops are enabled).
 import functools
 import math
 import os
+import signal
 import sys
+import threading
+import time
 from dataclasses import dataclass
 
 import equinox as eqx
@@ -65,6 +68,7 @@ from ..camera import (
     film_develop,
     film_samples_to_XYZ,
 )
+from ._checkpoint import CheckpointError, load_checkpoint, render_identity, save_checkpoint
 from ._integrators import AbstractIntegrator, Path
 from ._registry import INTEGRATORS, SAMPLERS
 from ._render_scene import RenderScene
@@ -72,7 +76,7 @@ from ._samplers import AbstractSampler, Independent, sampler_seed
 from ._scenes import SceneDescription, compile_scene, load_scene, scene_integrator
 from ._spectral import sample_hero_wavelengths
 
-__all__ = ["RECONSTRUCTIONS", "render"]
+__all__ = ["RECONSTRUCTIONS", "RenderInterrupted", "render"]
 
 
 RECONSTRUCTIONS = ("splat", "importance")
@@ -245,6 +249,11 @@ def render(
     rfilter: AbstractFilter | None = None,
     reconstruction: str = "splat",
     return_xyz: bool = False,
+    checkpoint=None,
+    checkpoint_every: float = 60.0,
+    resume: bool = False,
+    preview=None,
+    preview_every: float = 60.0,
 ):
     r"""Render a scene spectrally into a linear sRGB image (thesis ch. 8-9; eq. 2.35).
 
@@ -283,6 +292,19 @@ def render(
         to $(2r+1)^2$ pixels, which for the Gaussian of the Cornell box divides the pixel
         variance by about $4\pi\sigma^2 \approx 3$ at the cost of correlated noise.
     - `return_xyz`: return CIE XYZ instead of linear sRGB.
+    - `checkpoint`: a file path: every `checkpoint_every` seconds [s] (and when interrupted)
+        the film's sums, the steps done and the render's identity are written there
+        atomically (`radiometria.render._checkpoint`). With `resume=True` the render continues
+        from that file, and the image is the same, bit for bit, as an uninterrupted render
+        with the same arguments; a checkpoint of another scene, spp, size, seed or version is
+        refused (`CheckpointError`). Single-process renders only.
+    - `preview`: a function `preview(image, spp_reached)` called with the partial image every
+        `preview_every` seconds [s] (e.g. to rewrite an image file during a long render).
+
+    Interrupts: SIGINT (Ctrl-C) and SIGTERM, when `render` runs in the main thread, stop the
+    render after the step in flight, write the checkpoint (if any), and raise
+    `RenderInterrupted` (a `KeyboardInterrupt`) carrying the partial image and the samples per
+    pixel every pixel has reached.
 
     **Returns:**
 
@@ -345,23 +367,64 @@ def render(
 
     # Multi-host: process i of m takes steps i, i + m, ...; the films are summed at the end.
     n_proc, proc = jax.process_count(), jax.process_index()
-    steps = range(proc, plan.n_steps, n_proc)
+    identity, start = None, 0
+    if checkpoint is not None:
+        if n_proc > 1:
+            raise ValueError("`checkpoint` supports single-process renders only.")
+        identity = render_identity(
+            kernel, seed=seed, spp=spp, width=width, height=height, layout=_layout(plan, cfg)
+        )
+        if resume:
+            xyz, w, start = load_checkpoint(checkpoint, identity)
+            if start > plan.n_steps:
+                raise CheckpointError(f"{checkpoint}: {start} steps done of {plan.n_steps}.")
+            film = eqx.tree_at(
+                lambda f: (f.xyz_sum, f.weight_sum),
+                film,
+                tuple(jax.device_put(x, NamedSharding(mesh, P())) for x in (xyz, w)),
+            )
+    elif resume:
+        raise ValueError("`resume=True` needs `checkpoint`, the file to resume from.")
+    steps = range(proc + start, plan.n_steps, n_proc)
     bar = _progress_bar(progress, total=n_pixels * spp if n_proc == 1 else None)
+    if bar is not None and start:
+        bar.update(sum(_paths_of_step(plan, i, spp) for i in range(start)))
     # Several XLA:CPU host devices: wait for each step before dispatching the next. Queued
     # multi-device steps can occupy every thread of the small CPU thread pool at a cross-device
     # rendezvous while the other device's part waits for a thread, which deadlocked on 2 cores.
     serialise = len(devices) > 1 and devices[0].platform == "cpu"
-    for i in steps:
-        group, tile = divmod(i, plan.n_tiles)
-        pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
-        film = _step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg)
-        if serialise:
-            film = jax.block_until_ready(film)
-        if bar is not None:  # the step's paths: its pixels in the image x its passes below spp
-            pixels = min(plan.tile, n_pixels - tile * plan.tile)
-            bar.update(pixels * min(plan.passes, spp - group * plan.passes))
+    now = time.monotonic()
+    last_checkpoint = last_preview = now
+    done = start
+    with _Interrupts() as interrupts:
+        for i in steps:
+            group, tile = divmod(i, plan.n_tiles)
+            pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
+            film = _step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg)
+            if serialise or checkpoint is not None or preview is not None:
+                film = jax.block_until_ready(film)
+            done = i + 1
+            if bar is not None:  # the step's paths: its pixels in the image x passes below spp
+                bar.update(_paths_of_step(plan, i, spp))
+            now = time.monotonic()
+            stop = interrupts.received is not None
+            if checkpoint is not None and (stop or now - last_checkpoint >= checkpoint_every):
+                if done < plan.n_steps:
+                    save_checkpoint(checkpoint, film.xyz_sum, film.weight_sum, done, identity)
+                last_checkpoint = now
+            if preview is not None and not stop and now - last_preview >= preview_every:
+                preview(np.asarray(_develop(film, "XYZ" if return_xyz else "sRGB")),
+                        _spp_reached(plan, done, spp))  # fmt: skip
+                last_preview = now
+            if stop:
+                break
     if bar is not None:
         bar.close()
+    if interrupts.received is not None and done < plan.n_steps:
+        image = np.asarray(_develop(film, "XYZ" if return_xyz else "sRGB"))
+        raise RenderInterrupted(
+            interrupts.received, image, _spp_reached(plan, done, spp), checkpoint
+        )
     if n_proc > 1:
         parts = multihost_utils.process_allgather((film.xyz_sum, film.weight_sum))
         film = eqx.tree_at(
@@ -372,6 +435,65 @@ def render(
 
 # One compiled program for the development (op by op, each of its operations would compile).
 _develop = eqx.filter_jit(film_develop)
+
+
+class RenderInterrupted(KeyboardInterrupt):
+    """A render stopped by SIGINT or SIGTERM after a completed step (thesis ch. 8: long renders).
+
+    **Attributes:**
+
+    - `signal_name`: `"SIGINT"` or `"SIGTERM"`.
+    - `image`: the partial image `(H, W, 3)`, as `render` would return it, with each pixel's
+        samples so far. [radiance-like]
+    - `spp_reached`: samples per pixel that every pixel has reached. [1]
+    - `checkpoint`: the checkpoint written, or `None`.
+    """
+
+    def __init__(self, signal_name: str, image, spp_reached: int, checkpoint):
+        super().__init__(f"render interrupted by {signal_name} at {spp_reached} spp")
+        self.signal_name, self.image = signal_name, image
+        self.spp_reached, self.checkpoint = spp_reached, checkpoint
+
+
+class _Interrupts:
+    """Within `with`: SIGINT and SIGTERM set `received` instead of stopping the process at
+    once, so the render ends after the step in flight (main thread only; else a no-op)."""
+
+    def __init__(self):
+        self.received = None
+        self._old = {}
+
+    def _handle(self, signum, frame):
+        self.received = signal.Signals(signum).name
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+        return False
+
+
+def _layout(plan: _Plan, cfg: _Config) -> tuple[int, ...]:
+    """The step layout a checkpoint's step count refers to."""
+    recon = RECONSTRUCTIONS.index(cfg.reconstruction)
+    return (plan.tile, plan.passes, plan.n_tiles, plan.n_groups, recon)
+
+
+def _paths_of_step(plan: _Plan, i: int, spp: int) -> int:
+    """Paths traced by step `i`: its pixels in the image x its passes below spp."""
+    group, tile = divmod(i, plan.n_tiles)
+    pixels = min(plan.tile, plan.n_pixels - tile * plan.tile)
+    return pixels * max(0, min(plan.passes, spp - group * plan.passes))
+
+
+def _spp_reached(plan: _Plan, steps_done: int, spp: int) -> int:
+    """Samples per pixel every pixel has after `steps_done` steps (whole pass groups)."""
+    return min(spp, (steps_done // plan.n_tiles) * plan.passes)
 
 
 def _check_plugin(value, name: str, base: type, registry: dict, example: str) -> None:
