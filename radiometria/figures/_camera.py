@@ -18,19 +18,21 @@ from ..camera import (
 )
 from ._registry import figure, save
 
+_FILTER_EXTENT = 3.0  # the filter figure plots offsets on [-3, 3] px in both axes [px]
 
-@figure("fig_2_filters")
-def fig_2_filters(out_dir, *, smoke: bool = False):
-    """Reconstruction filters and their importance-sampled footprints (thesis eq. 2.31-2.35).
 
-    Top row: the normalised 1D profile $f_1(x)$ of each filter and the histogram of sampled
-    x-offsets weighted by $w = f/p$, which reconstructs $f_1$ including its negative lobes (the
-    estimator of eq. 2.35 is unbiased). Bottom row: the 2D histogram of the sampled offsets,
-    i.e. the sampling density $p \\propto |f|$ (the footprint of one pixel's samples).
+def filters_figure_data(*, smoke: bool = False) -> dict:
+    """What the reconstruction-filter figure plots, from the filters of `radiometria.camera`.
+
+    `n`, the samples per filter (20 000 in smoke mode, else 10^6); `x` (1201,) on [-3, 3] [px];
+    `bins` (121,), the 1D histogram's edges [px]; and `filters`, one dict per filter (box,
+    tent, Gaussian, Mitchell-Netravali, Lanczos, default parameters) with `title`, `filter`,
+    `profile` = `evaluate_1d(x)` in float32 [px^-1], `offset` (n, 2) and `weight` (n,) =
+    `sample(u)` for uniforms `u` from key 0 (split per filter) [px], [dimensionless], `hist`
+    (120,), the histogram of `offset[:, 0]` weighted by `weight` and divided by
+    n times the bin width (an estimate of $f_1$) [px^-1], and `h2` (80, 80) with edges
+    `xe`, `ye`, the density of the sampled offsets ($\\propto |f|$) [px^-2].
     """
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import PowerNorm
-
     filters = [
         ("box", BoxFilter()),
         ("tent", TentFilter()),
@@ -39,18 +41,55 @@ def fig_2_filters(out_dir, *, smoke: bool = False):
         (r"Lanczos ($\tau$ = 3)", LanczosFilter()),
     ]
     n = 20_000 if smoke else 1_000_000
-    extent = 3.0
-    fig, axes = plt.subplots(2, len(filters), figsize=(15.0, 6.0), layout="constrained")
+    extent = _FILTER_EXTENT
     keys = jax.random.split(jax.random.key(0), len(filters))
     x = np.linspace(-extent, extent, 1201)
-    for col, ((title, filt), key) in enumerate(zip(filters, keys, strict=True)):
+    bins = np.linspace(-extent, extent, 121)
+    out = []
+    for (title, filt), key in zip(filters, keys, strict=True):
         offset, weight = filt.sample(jax.random.uniform(key, (n, 2), dtype=jnp.float32))
         offset, weight = np.asarray(offset, np.float64), np.asarray(weight, np.float64)
-        profile = np.asarray(filt.evaluate_1d(jnp.asarray(x, jnp.float32)))
-        ax = axes[0, col]
-        bins = np.linspace(-extent, extent, 121)
         hist, _ = np.histogram(offset[:, 0], bins=bins, weights=weight)
         hist /= n * np.diff(bins)  # the weighted histogram estimates the marginal of f: f_1
+        h2, xe, ye = np.histogram2d(
+            offset[:, 0], offset[:, 1], bins=80, range=[[-extent, extent], [-extent, extent]]
+        )
+        h2 /= n * np.diff(xe)[0] * np.diff(ye)[0]
+        out.append(
+            {
+                "title": title,
+                "filter": filt,
+                "profile": np.asarray(filt.evaluate_1d(jnp.asarray(x, jnp.float32))),
+                "offset": offset,
+                "weight": weight,
+                "hist": hist,
+                "h2": h2,
+                "xe": xe,
+                "ye": ye,
+            }
+        )
+    return {"n": n, "x": x, "bins": bins, "filters": out}
+
+
+@figure("fig_2_filters")
+def fig_2_filters(out_dir, *, smoke: bool = False):
+    """Reconstruction filters and their importance-sampled footprints (thesis eq. 2.31-2.35).
+
+    Top row: the normalised 1D profile $f_1(x)$ of each filter and the histogram of sampled
+    x-offsets weighted by $w = f/p$, which reconstructs $f_1$ including its negative lobes (the
+    estimator of eq. 2.35 is unbiased). Bottom row: the 2D histogram of the sampled offsets,
+    i.e. the sampling density $p \\propto |f|$ (the footprint of one pixel's samples). The data
+    are `filters_figure_data()`.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import PowerNorm
+
+    data = filters_figure_data(smoke=smoke)
+    extent, x, bins = _FILTER_EXTENT, data["x"], data["bins"]
+    fig, axes = plt.subplots(2, len(data["filters"]), figsize=(15.0, 6.0), layout="constrained")
+    for col, d in enumerate(data["filters"]):
+        title, filt, profile, hist = d["title"], d["filter"], d["profile"], d["hist"]
+        ax = axes[0, col]
         ax.stairs(
             hist,
             bins,
@@ -69,10 +108,7 @@ def fig_2_filters(out_dir, *, smoke: bool = False):
             ax.set_ylabel("filter value [px$^{-1}$]")
             ax.legend(fontsize=7, loc="upper left")
         ax2 = axes[1, col]
-        h2, xe, ye = np.histogram2d(
-            offset[:, 0], offset[:, 1], bins=80, range=[[-extent, extent], [-extent, extent]]
-        )
-        h2 /= n * np.diff(xe)[0] * np.diff(ye)[0]
+        h2 = d["h2"]
         im = ax2.imshow(
             h2.T, origin="lower", extent=(-extent, extent, -extent, extent), cmap="magma",
             interpolation="nearest", norm=PowerNorm(0.5),  # square-root scale shows the lobes

@@ -1,10 +1,13 @@
-"""Figures 2.5 and 2.6: the plotted pinhole geometry against a hand-written numpy pinhole."""
+"""Figures 2.5 and 2.6: the plotted pinhole geometry against a hand-written numpy pinhole; the
+filter figure: profiles against closed forms normalised by SciPy quadrature, histograms against
+the cell integrals of those closed forms."""
 
 import numpy as np
 import pytest
+from scipy import integrate
 
 from radiometria.figures import FIGURES, make_figures
-from radiometria.figures._camera import _FIG_CAMERA, pinhole_figure_data
+from radiometria.figures._camera import _FIG_CAMERA, filters_figure_data, pinhole_figure_data
 
 
 @pytest.fixture(scope="module")
@@ -83,9 +86,115 @@ def test_projection_figure_ndc_and_depth_map_equal_numpy(data):
     assert abs(z_ndc(2 * f * n / (f + n))) < 1e-12
 
 
-@pytest.mark.parametrize("name", ["fig_2_5_pinhole", "fig_2_6_projection"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "fig_2_5_pinhole",
+        "fig_2_6_projection",
+        pytest.param("fig_2_filters", marks=pytest.mark.slow),  # 8 s, most of it matplotlib
+    ],
+)
 def test_camera_figure_written(tmp_path, name):
     assert name in FIGURES
     paths = make_figures(tmp_path, [name], smoke=True)
     assert sorted(p.suffix for p in paths) == [".pdf", ".png"]
     assert all(p.stat().st_size > 1000 for p in paths)
+
+
+# --- reconstruction filters ----------------------------------------------------------------
+
+
+def _mitchell(x, B=1 / 3, C=1 / 3, r=2.0):
+    """(2 / r) k(2x / r), Mitchell & Netravali (1988) eq. 8, which integrates to 1."""
+    x = np.abs(2 * np.asarray(x, float) / r)
+    inner = ((12 - 9 * B - 6 * C) * x**3 + (-18 + 12 * B + 6 * C) * x**2 + (6 - 2 * B)) / 6
+    outer = (
+        (-B - 6 * C) * x**3 + (6 * B + 30 * C) * x**2 + (-12 * B - 48 * C) * x + (8 * B + 24 * C)
+    ) / 6
+    return 2 / r * np.where(x < 1, inner, np.where(x < 2, outer, 0.0))
+
+
+def _normalised(fn, r):
+    z, _ = integrate.quad(fn, -r, r, points=[0.0], limit=200, epsabs=1e-13)
+    return lambda x: fn(x) / z
+
+
+def _closed_forms():
+    """The 1D profiles f_1 of the figure's filters (defaults), by name, with their radius."""
+    s, rg = 0.5, 2.0
+    gauss = lambda x: np.maximum(np.exp(-(x**2) / (2 * s * s)) - np.exp(-(rg**2) / (2 * s * s)), 0)  # noqa: E731
+    lanczos = lambda x: np.where(np.abs(x) < 3, np.sinc(x) * np.sinc(x / 3), 0.0)  # noqa: E731
+    return {
+        "box": (lambda x: np.where(np.abs(x) < 0.5, 1.0, 0.0), 0.5),
+        "tent": (lambda x: np.maximum(1 - np.abs(x), 0.0), 1.0),
+        "Gaussian": (_normalised(gauss, rg), rg),
+        "Mitchell-Netravali": (_mitchell, 2.0),
+        "Lanczos": (_normalised(lanczos, 3.0), 3.0),
+    }
+
+
+@pytest.fixture(scope="module")
+def filters():
+    return filters_figure_data(smoke=True)
+
+
+def test_filters_figure_profiles_equal_closed_forms(filters):
+    x = filters["x"]
+    forms = _closed_forms()
+    assert [d["title"].split(" (")[0] for d in filters["filters"]] == list(forms)
+    for d, (name, (fn, r)) in zip(filters["filters"], forms.items(), strict=True):
+        assert d["filter"].radius == pytest.approx(r)
+        # Unit integrals (SciPy quad): box, tent and Mitchell without normalisation.
+        total, _ = integrate.quad(fn, -r, r, points=[0.0], limit=200)
+        assert total == pytest.approx(1.0, abs=1e-9), name
+        far = np.abs(np.abs(x) - r) > 1e-3  # away from the box's jump
+        np.testing.assert_allclose(
+            d["profile"][far], fn(x[far]), rtol=1e-5, atol=1e-6, err_msg=name
+        )
+    # Mitchell and Lanczos have negative lobes; the others do not.
+    neg = {d["title"].split(" (")[0]: d["profile"].min() < -1e-3 for d in filters["filters"]}
+    assert neg == {
+        "box": False,
+        "tent": False,
+        "Gaussian": False,
+        "Mitchell-Netravali": True,
+        "Lanczos": True,
+    }
+
+
+def test_filters_figure_histograms_estimate_the_filter(filters):
+    """The weighted 1D histogram is an unbiased estimate of the bin averages of f_1 (eq. 2.35),
+    within 5 of its own standard errors (plus 1e-3 for the float32 sampling), and the 2D
+    histogram's x-marginal is the density |f_1| / int |f_1| (binomial standard errors)."""
+    n, bins = filters["n"], filters["bins"]
+    width = np.diff(bins)
+    for d, (name, (fn, r)) in zip(filters["filters"], _closed_forms().items(), strict=True):
+        assert d["offset"].shape == (n, 2) and np.all(np.abs(d["offset"]) <= r + 1e-6)
+        cells = np.array(
+            [integrate.quad(fn, a, b)[0] for a, b in zip(bins[:-1], bins[1:], strict=True)]
+        )
+        # Var(w 1_bin) <= max(w^2) P(bin), P(bin) = int_bin |f_1| / int |f_1| (p ~ |f|): a
+        # standard error from the model, not from the (few) samples in the tails.
+        abs_bins = np.array(
+            [
+                integrate.quad(lambda t, fn=fn: abs(fn(t)), a, b, limit=100)[0]
+                for a, b in zip(bins[:-1], bins[1:], strict=True)
+            ]
+        )
+        se = np.abs(d["weight"]).max() * np.sqrt(abs_bins / abs_bins.sum() / n) / width
+        error = np.abs(d["hist"] - cells / width)
+        np.testing.assert_array_less(error, 5 * se + 1e-4, err_msg=name)
+        # The marginals of the sampling density in x and in y, from h2 (separable, p ~ |f|).
+        abs_cells = np.array(
+            [
+                integrate.quad(lambda t, fn=fn: abs(fn(t)), a, b, limit=100)[0]
+                for a, b in zip(d["xe"][:-1], d["xe"][1:], strict=True)
+            ]
+        )
+        p = abs_cells / abs_cells.sum()
+        cell = np.diff(d["xe"])[0] * np.diff(d["ye"])[0]
+        for axis in (1, 0):
+            observed = d["h2"].sum(axis=axis) * cell
+            bound = 5 * np.sqrt(p * (1 - p) / n) + 1e-4
+            np.testing.assert_array_less(np.abs(observed - p), bound, err_msg=name)
+        assert d["h2"].sum() * cell == pytest.approx(1.0)
