@@ -10,16 +10,14 @@ from .. import montecarlo as mc
 from ._registry import figure, save
 
 
-@figure("fig_5_point_sets")
-def fig_5_point_sets(out_dir, *, smoke: bool = False):
-    """Two-dimensional point sets side by side (thesis ch. 5).
+def point_sets_data(*, smoke: bool = False) -> dict:
+    """What fig. 5 (point sets) plots: `{"n", "side", "sets": [(title, points (n, 2)), ...]}`.
 
-    Independent uniform, jittered stratified, Latin hypercube, Halton (bases 2, 3), Sobol
-    (Joe-Kuo) and Owen-scrambled Sobol, 256 points each (64 in smoke mode), with the 16 x 16
-    grid that a (0, 8, 2)-net fills with exactly one point per elementary interval.
+    n = 256 points (64 in smoke mode) of each generator of `radiometria.montecarlo`, key 0
+    split four ways: `independent`, `stratified` (side x side jittered, side = sqrt(n)),
+    `latin_hypercube`, `halton` (bases 2, 3, unscrambled), `sobol` (Joe-Kuo, unscrambled) and
+    `sobol(scramble="owen")`, all in $[0, 1)^2$.
     """
-    import matplotlib.pyplot as plt
-
     n = 64 if smoke else 256
     side = int(round(math.sqrt(n)))
     keys = jax.random.split(jax.random.key(0), 4)
@@ -31,9 +29,24 @@ def fig_5_point_sets(out_dir, *, smoke: bool = False):
         ("Sobol (Joe-Kuo)", mc.sobol(n, 2)),
         ("Sobol, Owen-scrambled", mc.sobol(n, 2, scramble="owen", key=keys[3])),
     ]
+    return {"n": n, "side": side, "sets": [(t, np.asarray(p)) for t, p in sets]}
+
+
+@figure("fig_5_point_sets")
+def fig_5_point_sets(out_dir, *, smoke: bool = False):
+    """Two-dimensional point sets side by side (thesis ch. 5).
+
+    Independent uniform, jittered stratified, Latin hypercube, Halton (bases 2, 3), Sobol
+    (Joe-Kuo) and Owen-scrambled Sobol, 256 points each (64 in smoke mode), with the 16 x 16
+    grid that a (0, 8, 2)-net fills with exactly one point per elementary interval. The data
+    are `point_sets_data()`.
+    """
+    import matplotlib.pyplot as plt
+
+    data = point_sets_data(smoke=smoke)
+    n, side, sets = data["n"], data["side"], data["sets"]
     fig, axes = plt.subplots(1, len(sets), figsize=(3.0 * len(sets), 3.3), layout="constrained")
     for ax, (title, pts) in zip(axes, sets, strict=True):
-        pts = np.asarray(pts)
         for t in np.linspace(0, 1, side + 1):
             ax.axhline(t, color="0.88", lw=0.5, zorder=0)
             ax.axvline(t, color="0.88", lw=0.5, zorder=0)
@@ -43,41 +56,80 @@ def fig_5_point_sets(out_dir, *, smoke: bool = False):
     return save(fig, out_dir, "fig_5_point_sets")
 
 
+_GENZ_PROBLEMS = [
+    ("Gaussian, d = 2", "gaussian", 2),
+    ("oscillatory, d = 4", "oscillatory", 4),
+    ("continuous (kinked), d = 3", "continuous", 3),
+    ("discontinuous, d = 2", "discontinuous", 2),
+]
+_CONVERGENCE_METHODS = [
+    ("mc", "independent"),
+    ("lhs", "Latin hypercube"),
+    ("halton", "Halton (Owen)"),
+    ("sobol", "Sobol (Owen)"),
+]
+
+
+def convergence_figure_data(*, smoke: bool = False, n_replicates: int | None = None) -> dict:
+    """What fig. 6 (convergence) plots: `convergence_study` of four Genz integrands.
+
+    `ns`: 2^4 ... 2^8 in smoke mode, else 2^4 ... 2^14; `problems`: one dict per integrand
+    (Gaussian d = 2, oscillatory d = 4, continuous d = 3, discontinuous d = 2, parameters
+    `a`, `w` drawn from `numpy.random.default_rng(6)`) with `title`, `kind`, `dim`, `a`,
+    `w`, `f`, `exact` (the closed-form integral from `genz`) and `studies`,
+    `{method: ConvergenceStudy}` for `"mc"`, `"lhs"`, `"halton"`, `"sobol"` (Owen-scrambled
+    QMC), each with `n_replicates` independent replicates (default 6 in smoke mode, else 48;
+    key 6 split per study): the RMSE (len(ns),) and the fitted log-log `slope`.
+    """
+    ks = range(4, 9) if smoke else range(4, 15)
+    ns = [2**k for k in ks]
+    if n_replicates is None:
+        n_replicates = 6 if smoke else 48
+    rng = np.random.default_rng(6)
+    key = jax.random.key(6)
+    problems = []
+    for title, kind, d in _GENZ_PROBLEMS:
+        a, w = rng.uniform(0.5, 1.5, d), rng.uniform(0.2, 0.8, d)
+        f, exact = mc.genz(kind, a, w)
+        studies = {}
+        for method, _ in _CONVERGENCE_METHODS:
+            key, sub = jax.random.split(key)
+            studies[method] = mc.convergence_study(
+                f, exact, ns, method=method, dim=d, key=sub, n_replicates=n_replicates
+            )
+        problems.append(
+            {
+                "title": title,
+                "kind": kind,
+                "dim": d,
+                "a": a,
+                "w": w,
+                "f": f,
+                "exact": exact,
+                "studies": studies,
+            }
+        )
+    return {"ns": ns, "n_replicates": n_replicates, "problems": problems}
+
+
 @figure("fig_6_convergence")
 def fig_6_convergence(out_dir, *, smoke: bool = False):
     """RMSE against n for several integrands and samplers on log-log axes (thesis ch. 6).
 
     Genz test integrands (smooth Gaussian and oscillatory, kinked continuous, discontinuous) in
     2-4 dimensions; plain MC, Latin hypercube, Owen-scrambled Halton and Owen-scrambled Sobol,
-    each RMSE over independent replicates. The dotted guides have slopes -1/2 and -3/2.
+    each RMSE over independent replicates. The dotted guides have slopes -1/2 and -3/2. The
+    data are `convergence_figure_data()`.
     """
     import matplotlib.pyplot as plt
 
-    ks = range(4, 9) if smoke else range(4, 15)
-    ns = [2**k for k in ks]
-    reps = 6 if smoke else 48
-    problems = [
-        ("Gaussian, d = 2", "gaussian", 2),
-        ("oscillatory, d = 4", "oscillatory", 4),
-        ("continuous (kinked), d = 3", "continuous", 3),
-        ("discontinuous, d = 2", "discontinuous", 2),
-    ]
-    methods = [
-        ("mc", "independent"),
-        ("lhs", "Latin hypercube"),
-        ("halton", "Halton (Owen)"),
-        ("sobol", "Sobol (Owen)"),
-    ]
-    rng = np.random.default_rng(6)
-    fig, axes = plt.subplots(1, len(problems), figsize=(16.0, 4.0), layout="constrained")
-    key = jax.random.key(6)
-    for ax, (title, kind, d) in zip(axes, problems, strict=True):
-        f, exact = mc.genz(kind, rng.uniform(0.5, 1.5, d), rng.uniform(0.2, 0.8, d))
-        for method, label in methods:
-            key, sub = jax.random.split(key)
-            study = mc.convergence_study(
-                f, exact, ns, method=method, dim=d, key=sub, n_replicates=reps
-            )
+    data = convergence_figure_data(smoke=smoke)
+    ns = data["ns"]
+    fig, axes = plt.subplots(1, len(_GENZ_PROBLEMS), figsize=(16.0, 4.0), layout="constrained")
+    for ax, problem in zip(axes, data["problems"], strict=True):
+        title = problem["title"]
+        for method, label in _CONVERGENCE_METHODS:
+            study = problem["studies"][method]
             ax.loglog(
                 ns, np.asarray(study.rmse), "o-", ms=3, label=f"{label} ({float(study.slope):.2f})"
             )
@@ -206,6 +258,44 @@ RECT_METHODS = [
 ]
 
 
+def variance_reduction_data(*, smoke: bool = False) -> dict:
+    """What fig. 7 (variance reduction) plots, for the irradiance under the rectangular light.
+
+    `exact` = `rect_irradiance_exact()`; `methods` = `RECT_METHODS`; `ns`, the sample counts
+    (4 ... 256 in smoke mode, else 4 ... 4096); `n_replicates` (32 or 256); `rmse` (methods,
+    ns), the RMSE of the mean of `n` terms over independent replicates; `n_var` (20 000 or
+    200 000) and `per_sample_var` (methods,), the variance of one term of each estimator
+    (key 7, split in turn for every estimate).
+    """
+    exact = rect_irradiance_exact()
+    ns = [4, 16, 64, 256] if smoke else [4, 16, 64, 256, 1024, 4096]
+    reps = 32 if smoke else 256
+    n_var = 20_000 if smoke else 200_000
+    key = jax.random.key(7)
+    rmse, per_sample_var = [], []
+    for method in RECT_METHODS:
+        row = []
+        for m in ns:
+            key, sub = jax.random.split(key)
+            ests = jax.vmap(lambda k, m=m, method=method: _rect_terms(method, m, k).mean())(
+                jax.random.split(sub, reps)
+            )
+            row.append(float(np.sqrt(np.mean((np.asarray(ests) - exact) ** 2))))
+        rmse.append(row)
+        key, sub = jax.random.split(key)
+        terms = _rect_terms(method, n_var, sub)
+        per_sample_var.append(float(np.var(np.asarray(terms))))
+    return {
+        "exact": exact,
+        "methods": list(RECT_METHODS),
+        "ns": ns,
+        "n_replicates": reps,
+        "rmse": np.array(rmse),
+        "n_var": n_var,
+        "per_sample_var": np.array(per_sample_var),
+    }
+
+
 @figure("fig_7_variance_reduction")
 def fig_7_variance_reduction(out_dir, *, smoke: bool = False):
     """Variance of irradiance estimators for a rectangular area light (thesis eq. 1.13, ch. 7).
@@ -215,27 +305,14 @@ def fig_7_variance_reduction(out_dir, *, smoke: bool = False):
     sampling, light-area sampling, uniform spherical-triangle (solid angle) sampling, MIS of
     light and cosine sampling (balance and power heuristics; each term uses one sample of
     each) and area sampling with a control variate (the light's solid angle). Right: the
-    variance per sample.
+    variance per sample. The data are `variance_reduction_data()`.
     """
     import matplotlib.pyplot as plt
 
-    exact = rect_irradiance_exact()
-    ns = [4, 16, 64, 256] if smoke else [4, 16, 64, 256, 1024, 4096]
-    reps = 32 if smoke else 256
+    data = variance_reduction_data(smoke=smoke)
+    exact, ns, per_sample_var = data["exact"], data["ns"], list(data["per_sample_var"])
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(12.0, 4.2), layout="constrained")
-    key = jax.random.key(7)
-    per_sample_var = []
-    for method in RECT_METHODS:
-        rmse = []
-        for m in ns:
-            key, sub = jax.random.split(key)
-            ests = jax.vmap(lambda k, m=m, method=method: _rect_terms(method, m, k).mean())(
-                jax.random.split(sub, reps)
-            )
-            rmse.append(float(np.sqrt(np.mean((np.asarray(ests) - exact) ** 2))))
-        key, sub = jax.random.split(key)
-        terms = _rect_terms(method, 20_000 if smoke else 200_000, sub)
-        per_sample_var.append(float(np.var(np.asarray(terms))))
+    for method, rmse in zip(RECT_METHODS, data["rmse"], strict=True):
         ax0.loglog(ns, rmse, "o-", ms=3, label=method)
     ax0.set(
         xlabel="samples n",
