@@ -224,7 +224,14 @@ def validate_triangles(
             f"{where}: face {bad} {faces[bad].tolist()} indexes a vertex outside "
             f"[0, {len(vertices)})."
         )
-    areas = _areas(np, vertices, faces) if faces.size else np.zeros(0)
+    with np.errstate(over="ignore", invalid="ignore"):  # huge coordinates: checked just below
+        areas = _areas(np, vertices, faces) if faces.size else np.zeros(0)
+    if not np.all(np.isfinite(areas)):
+        bad = int(np.argwhere(~np.isfinite(areas))[0, 0])
+        raise ValueError(
+            f"{where}: triangle {bad} (vertices {faces[bad].tolist()}) is too large for "
+            "float64 arithmetic (its area overflows); rescale the scene."
+        )
     keep = areas > 0
     if degenerate == "error" and not np.all(keep):
         bad = int(np.argwhere(~keep)[0, 0])

@@ -97,7 +97,7 @@ class _Json:
     def array(self, shape: tuple, dtype=np.float64) -> np.ndarray:
         try:
             a = np.asarray(self.value, dtype=dtype)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self.err(f"expected a numeric array of shape {shape}") from None
         if a.ndim != len(shape) or any(
             s not in (-1, n) for s, n in zip(shape, a.shape, strict=True)

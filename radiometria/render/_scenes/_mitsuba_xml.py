@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...radiometry import BlackbodySpectrum, PiecewiseLinearSpectrum
+from ...radiometry import AbstractSpectrum, BlackbodySpectrum, PiecewiseLinearSpectrum
 from .._geometry._mesh import icosphere
 from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS
 from .._spectral import LinearRGB, SpectralValue
@@ -152,10 +152,11 @@ def _vec3(ctx: _Ctx, node: _Node, default: float = 0.0) -> np.ndarray:
 
 
 def _rotation(axis: np.ndarray, angle_deg: float) -> np.ndarray:
-    norm = np.linalg.norm(axis)
-    if norm == 0:
+    big = np.max(np.abs(axis))
+    if big == 0:
         raise ValueError("zero rotation axis")
-    x, y, z = axis / norm
+    axis = axis / big  # scaled first, so that the norm cannot overflow
+    x, y, z = axis / np.linalg.norm(axis)
     a = math.radians(angle_deg)
     c, s = math.cos(a), math.sin(a)
     m = np.eye(4)
@@ -195,7 +196,10 @@ def _transform(ctx: _Ctx, node: _Node) -> np.ndarray:
                 raise ctx.err(op, str(e)) from None
         else:
             raise ctx.err(op, f"unsupported transform element <{op.tag}> (line {op.line})")
-        m = t @ m
+        with np.errstate(over="ignore", invalid="ignore"):  # checked below
+            m = t @ m
+        if not np.all(np.isfinite(m)):
+            raise ctx.err(op, "the transform overflows float64 (an absurd scale or translation)")
     return m
 
 
@@ -301,7 +305,52 @@ def _properties(ctx: _Ctx, node: _Node, allowed: set[str]) -> dict:
             out[name] = _transform(ctx, ch)
         else:
             out[name] = _spectrum_value(ctx, ch)
+        out[name] = _expected_type(ctx, ch, name, out[name])
     return out
+
+
+_SPECTRAL = (LinearRGB, AbstractSpectrum, float)
+_TYPES = {
+    int: ("an <integer>", ("width", "height", "sample_count", "max_depth", "rr_depth", "seed",
+                           "crop_offset_x", "crop_offset_y", "crop_width", "crop_height",
+                           "emitter_samples", "bsdf_samples", "shading_samples")),
+    float: ("a <float>", ("fov", "near_clip", "far_clip", "radius", "alpha", "alpha_u",
+                          "alpha_v", "temperature", "stddev", "B", "C", "lobes",
+                          "focus_distance", "principal_point_offset_x",
+                          "principal_point_offset_y", "scale")),
+    str: ("a <string>", ("fov_axis", "focal_length", "filename", "material", "distribution",
+                         "pixel_format", "component_format", "file_format")),
+    bool: ("a <boolean>", ("flip_normals", "face_normals", "flip_tex_coords", "hide_emitters",
+                           "sample_visible", "jitter", "compensate", "banner",
+                           "sample_border")),
+    np.ndarray: ("a <transform> (to_world) or a <point> (center)", ("to_world", "center")),
+    _SPECTRAL: ("an <rgb>, <spectrum> or <float>", ("reflectance", "radiance", "eta", "k",
+                                                     "specular_reflectance",
+                                                     "specular_transmittance")),
+    (str, *_SPECTRAL): ("a <string> or a spectrum", ("int_ior", "ext_ior")),
+}  # fmt: skip
+_EXPECTED = {name: (kind, what) for kind, (what, names) in _TYPES.items() for name in names}
+
+
+def _expected_type(ctx: _Ctx, node: _Node, name: str, value):
+    """A parameter's value has the kind its name calls for (an integer width, a float fov,
+    a spectral reflectance...): else an error names the file, the line and the parameter."""
+    if name not in _EXPECTED:
+        return value
+    kind, what = _EXPECTED[name]
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    ok = isinstance(value, kind) and not (kind in (int, float) and isinstance(value, bool))
+    if ok and kind is np.ndarray:
+        ok = value.shape == _SHAPES[name]
+    if not ok:
+        raise ctx.err(node, f"parameter '{name}' must be {what}, got <{node.tag}>")
+    if name == "to_world" and not abs(np.linalg.det(value[:3, :3])) > 1e-12:
+        raise ctx.err(node, "degenerate transform: its 3x3 part is singular (a zero scale?)")
+    return value
+
+
+_SHAPES = {"to_world": (4, 4), "center": (3,)}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -425,7 +474,8 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
             raise ctx.err(node, "the sphere 'radius' must be a float > 0")
         v = v * radius + props.get("center", np.zeros(3))
     m = props.get("to_world", np.eye(4))
-    v = v @ m[:3, :3].T + m[:3, 3]
+    with np.errstate(over="ignore", invalid="ignore"):  # non-finite vertices are refused later
+        v = v @ m[:3, :3].T + m[:3, 3]
     if props.get("flip_normals", False):
         f = f[:, [0, 2, 1]]
     material = None
