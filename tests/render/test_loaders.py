@@ -269,3 +269,26 @@ def test_bad_json_reflectance_names_the_field(tmp_path):
     path.write_text(json.dumps(data))
     with pytest.raises(SceneError, match=rf"box\.json: field 'materials\.{name}\.{key}'"):
         load_scene(path)
+
+
+def test_degenerate_camera_transform_is_refused(tmp_path):
+    xml = (
+        '<scene version="3.0.0">\n  <sensor type="perspective">\n'
+        '    <transform name="to_world"><scale z="0"/></transform>\n  </sensor>\n</scene>'
+    )
+    path = tmp_path / "cam.xml"
+    path.write_text(xml)
+    with pytest.raises(SceneError, match=r"cam\.xml:2: .*degenerate camera transform"):
+        load_scene(path)
+
+
+def test_parameter_of_the_wrong_kind_is_named(tmp_path):
+    xml = (
+        '<scene version="3.0.0">\n  <sensor type="perspective">\n'
+        '    <film type="hdrfilm"><spectrum name="width" value="-1"/></film>\n'
+        "  </sensor>\n</scene>"
+    )
+    path = tmp_path / "film.xml"
+    path.write_text(xml)
+    with pytest.raises(SceneError, match=r"film\.xml:3: .*parameter 'width' must be an <integer>"):
+        load_scene(path)

@@ -345,8 +345,6 @@ def _expected_type(ctx: _Ctx, node: _Node, name: str, value):
         ok = value.shape == _SHAPES[name]
     if not ok:
         raise ctx.err(node, f"parameter '{name}' must be {what}, got <{node.tag}>")
-    if name == "to_world" and not abs(np.linalg.det(value[:3, :3])) > 1e-12:
-        raise ctx.err(node, "degenerate transform: its 3x3 part is singular (a zero scale?)")
     return value
 
 
@@ -520,6 +518,9 @@ def _sensor(ctx: _Ctx, node: _Node):
         ctx, node, {"fov", "fov_axis", "focal_length", "to_world", "near_clip", "far_clip",
                     "focus_distance", "principal_point_offset_x", "principal_point_offset_y"}
     )  # fmt: skip
+    to_world = props.get("to_world", np.eye(4))
+    if not abs(np.linalg.det(to_world[:3, :3])) > 1e-12:
+        raise ctx.err(node, "degenerate camera transform: its 3x3 part is singular")
     axis = props.get("fov_axis", "x")
     if axis not in ("x", "y", "diagonal", "smaller", "larger"):
         raise ctx.err(node, f"unknown fov_axis {axis!r}")
@@ -533,7 +534,7 @@ def _sensor(ctx: _Ctx, node: _Node):
     if fov is None or not 0 < fov < 180:
         raise ctx.err(node, f"fov must be in (0, 180) degrees, got {fov}")
     camera = CameraDescription(
-        to_world=props.get("to_world", np.eye(4)),
+        to_world=to_world,
         fov_deg=float(fov),
         fov_axis=axis,
         near_clip=float(props.get("near_clip", 1e-2)),
