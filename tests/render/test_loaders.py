@@ -285,7 +285,7 @@ def test_degenerate_camera_transform_is_refused(tmp_path):
 def test_parameter_of_the_wrong_kind_is_named(tmp_path):
     xml = (
         '<scene version="3.0.0">\n  <sensor type="perspective">\n'
-        '    <film type="hdrfilm"><spectrum name="width" value="-1"/></film>\n'
+        '    <film type="hdrfilm"><spectrum name="width" value="7"/></film>\n'
         "  </sensor>\n</scene>"
     )
     path = tmp_path / "film.xml"
