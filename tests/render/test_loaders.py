@@ -292,3 +292,19 @@ def test_parameter_of_the_wrong_kind_is_named(tmp_path):
     path.write_text(xml)
     with pytest.raises(SceneError, match=r"film\.xml:3: .*parameter 'width' must be an <integer>"):
         load_scene(path)
+
+
+def test_xml_entity_expansion_bomb_is_refused(tmp_path):
+    """A 'billion laughs' file fails fast with the file and line named (expat's amplification
+    limit), without expanding 10^9 entities."""
+    levels = ['<!ENTITY lol0 "lolololololololololol">'] + [
+        f'<!ENTITY lol{i} "{f"&lol{i - 1};" * 10}">' for i in range(1, 10)
+    ]
+    xml = (
+        '<?xml version="1.0"?>\n<!DOCTYPE lolz [\n' + "\n".join(levels) + "\n]>\n"
+        '<scene version="3.0.0"><string name="x" value="&lol9;"/></scene>\n'
+    )
+    path = tmp_path / "bomb.xml"
+    path.write_text(xml)
+    with pytest.raises(SceneError, match=r"bomb\.xml:\d+:\d+: malformed XML: .*amplification"):
+        load_scene(path)
