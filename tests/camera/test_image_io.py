@@ -136,3 +136,33 @@ def test_spectral_exr_layout_and_round_trip(tmp_path):
         cam.write_spectral_exr(tmp_path / "t.exr", spec, np.array([400.0, 400.0, 500.0, 600.0]))
     with pytest.raises(ValueError, match="no spectral channel"):
         cam.read_spectral_exr(cam.write_exr(tmp_path / "rgb.exr", rgb))
+
+
+def test_concurrent_writers_leave_one_complete_file(tmp_path):
+    """Two writers racing on one path (two renders with the same --out): every read finds
+    one writer's complete image, never a mix or a truncated file (atomic rename)."""
+    import threading
+
+    from radiometria.camera import read_exr, write_exr
+
+    path = tmp_path / "race.exr"
+    images = [np.full((64, 64, 3), v, np.float32) for v in (0.25, 0.75)]
+
+    def writer(image):
+        for _ in range(20):
+            write_exr(path, image)
+
+    threads = [threading.Thread(target=writer, args=(im,)) for im in images]
+    for t in threads:
+        t.start()
+    seen = set()
+    while any(t.is_alive() for t in threads):
+        if path.exists():
+            rgb, _ = read_exr(path)
+            assert np.unique(rgb).size == 1  # one writer's image, whole
+            seen.add(float(rgb[0, 0, 0]))
+    for t in threads:
+        t.join()
+    final, _ = read_exr(path)
+    assert float(final[0, 0, 0]) in (0.25, 0.75) and np.unique(final).size == 1
+    assert not [p for p in tmp_path.iterdir() if p.name != "race.exr"]  # no temporaries left
