@@ -70,7 +70,9 @@ _CONVERGENCE_METHODS = [
 ]
 
 
-def convergence_figure_data(*, smoke: bool = False, n_replicates: int | None = None) -> dict:
+def convergence_figure_data(
+    *, smoke: bool = False, n_replicates: int | None = None, methods=None
+) -> dict:
     """What fig. 6 (convergence) plots: `convergence_study` of four Genz integrands.
 
     `ns`: 2^4 ... 2^8 in smoke mode, else 2^4 ... 2^14; `problems`: one dict per integrand
@@ -79,7 +81,8 @@ def convergence_figure_data(*, smoke: bool = False, n_replicates: int | None = N
     `w`, `f`, `exact` (the closed-form integral from `genz`) and `studies`,
     `{method: ConvergenceStudy}` for `"mc"`, `"lhs"`, `"halton"`, `"sobol"` (Owen-scrambled
     QMC), each with `n_replicates` independent replicates (default 6 in smoke mode, else 48;
-    key 6 split per study): the RMSE (len(ns),) and the fitted log-log `slope`.
+    key 6 split per study): the RMSE (len(ns),) and the fitted log-log `slope`. `methods`
+    restricts the studies to a subset of those names (`None`: all four, as plotted).
     """
     ks = range(4, 9) if smoke else range(4, 15)
     ns = [2**k for k in ks]
@@ -93,6 +96,8 @@ def convergence_figure_data(*, smoke: bool = False, n_replicates: int | None = N
         f, exact = mc.genz(kind, a, w)
         studies = {}
         for method, _ in _CONVERGENCE_METHODS:
+            if methods is not None and method not in methods:
+                continue
             key, sub = jax.random.split(key)
             studies[method] = mc.convergence_study(
                 f, exact, ns, method=method, dim=d, key=sub, n_replicates=n_replicates

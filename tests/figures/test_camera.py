@@ -91,7 +91,6 @@ def test_projection_figure_ndc_and_depth_map_equal_numpy(data):
     [
         "fig_2_5_pinhole",
         "fig_2_6_projection",
-        pytest.param("fig_2_filters", marks=pytest.mark.slow),  # 8 s, most of it matplotlib
     ],
 )
 def test_camera_figure_written(tmp_path, name):

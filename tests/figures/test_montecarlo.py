@@ -93,10 +93,11 @@ def _gauss_legendre_integral(f, dim, breaks, order=24):
 
 @pytest.fixture(scope="module")
 def convergence():
-    return convergence_figure_data(smoke=True, n_replicates=32)
+    """Smoke sizes, 32 replicates; Latin hypercube left out (its per-n compilations are most of
+    the 20 s the full data take)."""
+    return convergence_figure_data(smoke=True, n_replicates=32, methods=("mc", "halton", "sobol"))
 
 
-@pytest.mark.slow
 def test_convergence_figure_exact_integrals(convergence):
     """The reference integrals (genz's closed forms) against Gauss-Legendre quadrature of the
     plotted integrands."""
@@ -107,20 +108,22 @@ def test_convergence_figure_exact_integrals(convergence):
         assert p["exact"] == pytest.approx(quad, rel=1e-9, abs=1e-12), p["title"]
 
 
-@pytest.mark.slow
 def test_convergence_figure_slopes(convergence):
     """Fitted log-log slopes of the RMSE, n = 16 ... 256, 32 replicates per n.
 
     Tolerance: an RMSE from r = 32 replicates has a relative standard error of about
     1/sqrt(2 r) = 0.125 (more for skewed errors); the least-squares slope over 5 points
     spaced ln 2 apart then has a standard error of about 0.125 / sqrt(sum (ln n - mean)^2) =
-    0.125 / 2.19 = 0.057, so +-0.3 is about 5 standard errors. Independent sampling and
-    Latin hypercube (no gain beyond the additive part) converge as n^-1/2; Owen-scrambled
+    0.125 / 2.19 = 0.057, so +-0.3 is about 5 standard errors. Independent sampling
+    converges as n^-1/2; Owen-scrambled
     Sobol as n^-3/2 on smooth integrands (Owen 1997), at least n^-1 here; on the
     discontinuous one as n^-3/4 at best in d = 2 (Owen 2013 ch. 17), so it lies between.
     """
     ns = convergence["ns"]
     assert ns == [16, 32, 64, 128, 256] and convergence["n_replicates"] == 32
+    assert [p["kind"] for p in convergence["problems"]] == [
+        "gaussian", "oscillatory", "continuous", "discontinuous"
+    ]  # fmt: skip
     for p in convergence["problems"]:
         slope = {m: float(s.slope) for m, s in p["studies"].items()}
         name = p["title"]
@@ -129,7 +132,6 @@ def test_convergence_figure_slopes(convergence):
             fit = np.polyfit(np.log(ns), np.log(np.asarray(s.rmse)), 1)[0]
             assert slope[m] == pytest.approx(fit, abs=1e-9)
         assert -0.8 < slope["mc"] < -0.2, (name, slope)
-        assert slope["lhs"] < -0.2, (name, slope)
         if p["kind"] == "discontinuous":
             assert -1.2 < slope["sobol"] < -0.45, (name, slope)
         else:
@@ -138,7 +140,6 @@ def test_convergence_figure_slopes(convergence):
             assert slope["sobol"] < slope["mc"] - 0.5, (name, slope)
 
 
-@pytest.mark.slow
 def test_convergence_figure_mc_rmse_is_sigma_over_sqrt_n(convergence):
     """For independent sampling RMSE = sigma_f / sqrt(n): sigma_f from Gauss-Legendre
     quadrature of f^2 on the d = 2 integrands; the geometric mean over n of the ratio is
@@ -264,6 +265,11 @@ def test_montecarlo_figure_drawn_from_its_data(
 ):
     """The figure draws the data its helper returns (the module's fixture, not recomputed)."""
     data = request.getfixturevalue(fixture)
+    if name == "fig_6_convergence":  # the fixture leaves Latin hypercube out: reuse "mc"
+        problems = [
+            {**p, "studies": {"lhs": p["studies"]["mc"], **p["studies"]}} for p in data["problems"]
+        ]
+        data = {**data, "problems": problems}
     calls = []
     monkeypatch.setattr(_montecarlo, helper, lambda **kw: calls.append(kw) or data)
     paths = make_figures(tmp_path, [name], smoke=True)

@@ -60,8 +60,9 @@ def test_render_convergence_figure_slope(convergence):
     (the reference, Sobol at 128 spp, adds a floor under 1/16 of the 8 spp error, which
     flattens the slope by at most 0.03). The error is heavy-tailed (fireflies): slopes fitted
     to 16-seed means scatter by 0.18 between disjoint seed sets, so 64 seeds give about 0.09
-    and the bound 0.3 is over 3 standard errors. At 1 spp the Owen-scrambled Sobol sampler
-    has nothing to stratify across samples; at 8 spp it is clearly better.
+    and the bound 0.3 is over 3 standard errors (these seeds give -0.97). At 1 spp the
+    Owen-scrambled Sobol sampler has nothing to stratify across samples; at 8 spp it is
+    clearly better.
     """
     counts = np.asarray(convergence["counts"], float)
     np.testing.assert_array_equal(counts, [1, 2, 4, 8])

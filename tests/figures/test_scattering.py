@@ -166,9 +166,6 @@ def test_reflection_refraction_figure_obeys_the_laws(geometry):
         "fig_3_1_reflection_types",
         "fig_3_2_reflection_refraction",
         "fig_3_fresnel_dielectric",
-        "fig_3_fresnel_conductors",
-        "fig_3_brdf_lobes",
-        "fig_3_albedo_roughness",
     ],
 )
 def test_scattering_figure_written(tmp_path, name):
