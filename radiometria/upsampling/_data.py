@@ -1,15 +1,58 @@
-r"""The packaged sRGB coefficient table and `get_lut`.
+r"""The packaged coefficient tables (sRGB, Display P3, Rec.2020, ACEScg) and `get_lut`.
 
-`data/srgb_64.npz` holds the res-64 sRGB table fitted by this package's own `fit_lut`
-(float32, default settings; regenerate with `python -m radiometria.upsampling._make_data`). To
-keep the wheel small the float32 coefficients are stored *byte-shuffled* (the four byte planes
-of every float one after another, `coeffs_planes` of shape (4, 3 res^3 3), uint8) before
-zlib compression, which shrinks the file from 8.9 MB to about 6.7 MB; decoding is exact (a
-reshape and a view), and the sha256 in `metadata` (of the decoded `scale` and `coeffs`, as in
-`.npz` tables) is checked on load. `metadata` also records the fit settings, the residual
-distribution of the table points and the round-trip statistics measured when the file was made.
+**Files.** `data/` holds one res-64 float32 table per colour space that pbrt-v4 also ships:
 
-The file is read on the first `get_lut()` call, not at import (the table is 9.4 MB in memory).
+- sRGB: `srgb_64.npz`, sha256
+  `5dc4c8793f11b6b6be35c3178f68be9200f7238350b7ea07e9ed3c648bbe8d3c`;
+- Display P3: `display_p3_64.npz`, sha256
+  `4d0f582612934ab9f9a1234325fc382f867bfd56faf316193927b8c6131f4ff6`;
+- ITU-R BT.2020 (Rec.2020): `rec2020_64.npz`, sha256
+  `326911a51d3e46f98725fabe277c4db76a9d78f1bc26920204a39579778a0c07`;
+- ACEScg: `acescg_64.npz`, sha256
+  `dc9dc7acb8d26698d8154eac3da68d1df93632b3a0b8cd11ac6d8a2921f14d8d`.
+
+(`PACKAGED_SHA256` holds the same values; `tests/upsampling/test_wide_gamut.py` checks them.)
+
+**Provenance.** Source: this package's own fit (`fit_lut(space, 64)`, default settings,
+float32), regenerated with `python -m radiometria.upsampling._make_data [SPACE ...]`; no
+third-party table is copied. Inputs: the CIE 1931 2° colour-matching functions and the CIE
+illuminants D65 (sRGB, Display P3, Rec.2020) and CIE daylight at 6000 K x 1.4388/1.4380
+(ACEScg's ACES white, as pbrt), from `radiometria.colorimetry`'s packaged CIE tables (see
+`colorimetry/_data.py` for their source, licence and sha256); the colour spaces' primaries and
+whites from `colorimetry.RGB_COLOURSPACES`. Licence: the package's (Apache-2.0). Created
+2026-11-24 (sRGB earlier in the same release); `metadata["created_by"]` names the version.
+
+**Layout.** To keep the wheel small the float32 coefficients are stored *byte-shuffled* (the
+four byte planes of every float one after another, `coeffs_planes` of shape (4, 3 res^3 3),
+uint8) before zlib compression, which shrinks a table from 8.9 MB to about 6.7 MB; decoding is
+exact (a reshape and a view), and the sha256 in `metadata` (of the decoded `scale` and
+`coeffs`, as in `.npz` tables) is checked on load. `metadata` also records the fit settings,
+the residual distribution of the table points, the round-trip statistics measured when the
+file was made and, for every table but the older sRGB file, the same statistics split into
+the colours that a reflectance can have and those it cannot (`object_colour_scale`). The
+three wide-gamut files are written by `radiometria._io.write_npz_deterministic` (fixed zip
+timestamps, sorted members, no wall-clock value in `metadata`), so rebuilding them from the
+same table gives the same file sha256.
+
+**Accuracy** (round trip RGB -> spectrum -> RGB, CIEDE2000, float64; over the colours of each
+cube that a reflectance can have, `_roundtrip.has_reflectance`; "out" is the fraction of the
+cube no reflectance reaches; from the files' `metadata`, 49^3 linear grid and 1e5 uniform
+random linear colours, max / mean):
+
+| space | out (grid / random) | grid max / mean | random max / mean |
+| --- | --- | --- | --- |
+| sRGB | 0 / 0 | - | 0.50 / 0.011 (whole cube) |
+| Display P3 | 0.52 % / 0.21 % | 1.77 / 0.014 | 4.78 / 0.017 |
+| Rec.2020 | 9.9 % / 8.2 % | 1.93 / 0.025 | 3.61 / 0.029 |
+| ACEScg | 14.7 % / 10.8 % | 2.88 / 0.032 | 6.36 / 0.042 |
+
+The worst colours sit in table cells that touch out-of-reach nodes (dark reds with a trace of
+green or blue next to Display P3's red, for one). The fits leave 56 (Display P3), 453
+(Rec.2020) and 1272 (ACEScg) of 786 432 entries above the tolerance away from a stationary
+point (`RESULTS.nonlinear_max_steps_reached`); nearly all are colours no reflectance has.
+
+Each file is read on the first `get_lut(space)` call, not at import (a table is 9.4 MB in
+memory).
 """
 
 import functools
@@ -24,6 +67,26 @@ from ._lut import RGBToSpectrumLUT
 
 DATA_DIR = Path(__file__).parent / "data"
 SRGB_FILE = DATA_DIR / "srgb_64.npz"
+# Canonical colour-space name -> packaged file (res 64).
+PACKAGED_FILES = {
+    "sRGB": "srgb_64.npz",
+    "Display P3": "display_p3_64.npz",
+    "ITU-R BT.2020": "rec2020_64.npz",
+    "ACEScg": "acescg_64.npz",
+}
+# sha256 of each packaged file's bytes (the table in the module docstring).
+PACKAGED_SHA256 = {
+    "srgb_64.npz": "5dc4c8793f11b6b6be35c3178f68be9200f7238350b7ea07e9ed3c648bbe8d3c",
+    "display_p3_64.npz": "4d0f582612934ab9f9a1234325fc382f867bfd56faf316193927b8c6131f4ff6",
+    "rec2020_64.npz": "326911a51d3e46f98725fabe277c4db76a9d78f1bc26920204a39579778a0c07",
+    "acescg_64.npz": "dc9dc7acb8d26698d8154eac3da68d1df93632b3a0b8cd11ac6d8a2921f14d8d",
+}
+
+
+def packaged_path(space) -> Path | None:
+    """The packaged table file of a colour space (name or alias), or None if none is shipped."""
+    name = PACKAGED_FILES.get(get_colourspace(space).name)
+    return None if name is None else DATA_DIR / name
 
 
 def read_packaged(path: Path = SRGB_FILE) -> tuple[np.ndarray, np.ndarray, dict]:
@@ -35,20 +98,40 @@ def read_packaged(path: Path = SRGB_FILE) -> tuple[np.ndarray, np.ndarray, dict]
 
 @functools.lru_cache(maxsize=8)
 def _get_lut_cached(name: str) -> RGBToSpectrumLUT:
-    if name == "sRGB":
-        return load_lut(SRGB_FILE)
+    path = packaged_path(name)
+    if path is not None:
+        return load_lut(path)
     return fit_lut(name, 64, throw=False).lut
 
 
 def get_lut(space="sRGB") -> RGBToSpectrumLUT:
-    """The res-64 coefficient table of an RGB colour space, cached for the session.
+    r"""The res-64 coefficient table of an RGB colour space, cached for the session.
 
-    sRGB comes from the packaged file (fitted by `fit_lut`, see `_data.py`; the first call
-    reads and checks it, later calls return the cached table). Any other space of
+    sRGB, Display P3, Rec.2020 ("ITU-R BT.2020") and ACEScg come from the packaged files
+    (fitted by `fit_lut`; provenance and sha256 in `_data.py`): the first call reads and
+    checks the file, later calls return the cached table. Any other space of
     `colorimetry.RGB_COLOURSPACES` is fitted on first use with `fit_lut(space, 64,
-    throw=False)` (a few seconds) and kept in memory; to keep it across sessions, write it
-    with `save_lut` and read it with `load_lut`. Entries of wide-gamut spaces that no
-    sigmoid spectrum reaches are least-squares best fits (see `fit_lut`).
+    throw=False)` and kept in memory; to keep it across sessions, write it with `save_lut`
+    and read it with `load_lut`.
+
+    **Colours no reflectance has.** A reflectance is bounded by 1 at every wavelength, so
+    its colour lies in the object-colour solid (whose boundary is the Rösch-MacAdam optimal
+    colours); the saturated, bright corners of a wide-gamut cube lie outside it (Rec.2020's
+    primaries are monochromatic and Display P3's red is practically on the spectral locus,
+    so no multiple of them has a reflectance; `_roundtrip.object_colour_scale`). No spectrum
+    reproduces such a colour. At the table's nodes `fit_lut` stored the least-squares best
+    fit of eq. 2.27 (`RESULTS.out_of_reach`): a sigmoid spectrum, so in [0, 1], whose colour
+    is the nearest reachable one in CIELAB (checked: within 0.01 $\Delta E^*_{ab}$ of the
+    nearest optimal colour on the 1 nm grid). Between nodes the lookup interpolates the
+    coefficients as everywhere else: the spectrum is still in [0, 1] and its colour is one a
+    reflectance has, but not the nearest (measured: up to 4.3 $\Delta E^*_{ab}$ farther). The
+    lookup neither fails nor clips for these colours: `rgb` in [0, 1] is all it checks.
+
+    **Accuracy.** sRGB meets max CIEDE2000 <= 1 and mean <= 0.03 over its whole cube. The
+    wide-gamut tables do not, even over the colours a reflectance has: the table cells next
+    to the solid's boundary mix exact nodes with best-fit nodes, and trilinear interpolation
+    between them misses by up to a few CIEDE2000 units (the numbers are in `_data.py` and each
+    file's `metadata`).
 
     **Arguments:**
 
@@ -62,6 +145,6 @@ def get_lut(space="sRGB") -> RGBToSpectrumLUT:
         Section 2.2.3 (the precomputed lookup table).
 
     ??? cite "References"
-        `Jakob2019`; `Pharr2023` section 4.6.6.
+        `Jakob2019`; `Pharr2023` section 4.6.6; `Wyszecki2000` (optimal object colours).
     """
     return _get_lut_cached(get_colourspace(space).name)

@@ -443,6 +443,18 @@ def fit_lut(
 
     A `LUTFitResult` (table, per-entry residual and `optimistix.RESULTS`, timings).
 
+    **Colours no reflectance has.** A reflectance is at most 1 at every wavelength, so its
+    colour lies in the object-colour solid (bounded by the Rösch-MacAdam optimal colours);
+    the bright saturated corners of a wide-gamut cube (Rec.2020, ACEScg, ProPhoto) lie outside
+    it, and no spectrum at all reproduces them. For such an entry the sweep ends at a
+    stationary point of eq. 2.27 above `tolerance`; it is kept as the entry (the least-squares
+    best fit the continuation reached: a sigmoid spectrum, hence in [0, 1], whose colour is
+    the closest in $\Delta E^*_{ab}$ that the fit found, a local minimum) and reported as
+    `RESULTS.out_of_reach` (`LUTFitResult.out_of_reach`, `summary()["out_of_reach"]`), which is
+    not a failure for `throw`. Entries above `tolerance` away from a stationary point are
+    `nonlinear_max_steps_reached`. `_roundtrip.object_colour_scale` says independently
+    which colours have a reflectance.
+
     !!! note "Thesis"
         Eq. 2.25-2.27 and the lookup table of section 2.2.3; Gauss-Newton, appendix C.1.
 

@@ -261,7 +261,11 @@ def _load_npz(path: Path):
                         f"{res}, got {coeffs.dtype} {coeffs.shape}.",
                     )
                 coeffs = decode_planes(coeffs, (3, res, res, res, 3))
-            meta_raw = str(f["metadata"][()]) if "metadata" in files else None
+            meta_raw = None
+            if "metadata" in files:
+                # A 0-d string, or shape (1,) as `radiometria._io.npz_bytes` stores a 0-d array.
+                m = np.asarray(f["metadata"])
+                meta_raw = str(m.reshape(-1)[0]) if m.size == 1 else str(m[()])
     except LUTFileError:
         raise
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:

@@ -1,65 +1,119 @@
-"""Regenerate the packaged sRGB table: `python -m radiometria.upsampling._make_data`.
+"""Regenerate the packaged tables: `python -m radiometria.upsampling._make_data [SPACE ...]`.
 
-Fits the res-64 sRGB table with `fit_lut` (default settings, float32), measures its round-trip
-CIEDE2000 on the standard test sets (in float64), and writes `data/srgb_64.npz` atomically in
-the byte-plane layout described in `_data.py`, with the fit settings, the residual
-distribution of the table points and the round-trip statistics in its metadata.
+For each colour space (default: the four of `_data.PACKAGED_FILES`: sRGB, Display P3,
+ITU-R BT.2020, ACEScg) this fits the res-64 table with `fit_lut` (default settings, float32,
+`throw=False`: wide-gamut spaces have entries that no reflectance reaches, reported as
+`RESULTS.out_of_reach`), measures its round-trip CIEDE2000 (in float64) on the standard test
+sets and on a dense linear grid of the space's RGB cube, each split into the colours that a
+reflectance can have and those it cannot (`_roundtrip.has_reflectance`), and writes
+`data/<file>` with `radiometria._io.write_npz_deterministic` in the byte-plane layout described
+in `_data.py`, with the fit settings, the residual distribution of the table points and the
+statistics in its metadata. Nothing time-dependent goes into the file (the fit's wall time is
+printed, not stored), so the same table gives the same bytes. It prints the metadata and the
+file's sha256, which goes into `_data.PACKAGED_SHA256` and the `_data.py` docstring.
 """
 
+import hashlib
 import importlib.metadata
 import json
 import sys
+from pathlib import Path
 
 import jax
 import numpy as np
 
-from .._io import atomic_write
-from ._data import SRGB_FILE, encode_planes
+from .._io import write_npz_deterministic
+from ..colorimetry import get_colourspace
+from ._data import DATA_DIR, PACKAGED_FILES, encode_planes
 from ._fit_lut import fit_lut
 from ._io import checksum
 from ._roundtrip import (
+    has_reflectance,
     roundtrip_delta_E,
     roundtrip_grid_rgb,
     roundtrip_random_rgb,
     roundtrip_statistics,
 )
 
+FORMAT = "radiometria-rgb2spec-planes"
+LINEAR_GRID = 49  # the dense linear grid of the RGB cube: 49^3 = 117 649 colours
 
-def build_data(out=None, *, resolution: int = 64) -> dict:
-    """Fit, measure and write the packaged table; return its metadata."""
-    out = SRGB_FILE if out is None else out
-    fit = fit_lut("sRGB", resolution)
+
+def linear_grid_rgb(n: int = LINEAR_GRID) -> np.ndarray:
+    """The n^3 grid of *linear* values i / (n - 1) (float64, (n^3, 3)). [-]"""
+    v = np.linspace(0.0, 1.0, n)
+    return np.stack(np.meshgrid(v, v, v, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
+def split_statistics(lut, rgb: np.ndarray) -> dict:
+    """Round-trip CIEDE2000 over `rgb`, all colours and split by `has_reflectance`."""
+    de, _ = roundtrip_delta_E(lut, rgb)
+    ok = has_reflectance(rgb, lut.colourspace)
+    out = {
+        "all": roundtrip_statistics(de, rgb),
+        "fraction_out_of_reach": float(1.0 - ok.mean()),
+        "reachable": roundtrip_statistics(de[ok], rgb[ok]),
+    }
+    if (~ok).any():
+        out["out_of_reach"] = roundtrip_statistics(de[~ok], rgb[~ok])
+        # The colours that stay reachable when 2 % brighter (not in the solid's last shell).
+        inner = ok & has_reflectance(rgb, lut.colourspace, headroom=1.02)
+        out["reachable_headroom_1.02"] = roundtrip_statistics(de[inner], rgb[inner])
+    return out
+
+
+def measure(lut) -> dict:
+    """The round-trip statistics stored in a packaged table's metadata (float64)."""
+    with jax.enable_x64(True):
+        return {
+            "roundtrip_grid33_encoded": split_statistics(
+                lut, roundtrip_grid_rgb(33, lut.colourspace)
+            ),
+            "roundtrip_random_1e5_linear": split_statistics(
+                lut, roundtrip_random_rgb(100_000, seed=0)
+            ),
+            f"roundtrip_grid{LINEAR_GRID}_linear": split_statistics(lut, linear_grid_rgb()),
+        }
+
+
+def build_data(space="sRGB", out=None, *, resolution: int = 64) -> dict:
+    """Fit, measure and write one packaged table; return its metadata (plus `file_sha256`)."""
+    name = get_colourspace(space).name
+    out = Path(DATA_DIR / PACKAGED_FILES[name] if out is None else out)
+    # One JAX device per CPU core if the caller made them (`__main__` does); the sharded fit
+    # gives the same table bit for bit (tests/upsampling/test_fit_lut_sharded.py).
+    devices = jax.devices() if len(jax.devices()) > 1 else None
+    fit = fit_lut(name, resolution, devices=devices, throw=False)
     scale = np.asarray(fit.lut.scale, np.float32)
     coeffs = np.asarray(fit.lut.coeffs, np.float32)
-    with jax.enable_x64(True):
-        grid = roundtrip_grid_rgb(33)
-        rnd = roundtrip_random_rgb(100_000, seed=0)
-        de_grid, _ = roundtrip_delta_E(fit.lut, grid)
-        de_rnd, _ = roundtrip_delta_E(fit.lut, rnd)
+    summary = {k: v for k, v in fit.summary().items() if k != "seconds"}
     meta = {
-        "format": "radiometria-rgb2spec-planes",
+        "format": FORMAT,
         "version": 1,
-        "colourspace": "sRGB",
+        "colourspace": name,
         "resolution": resolution,
         "dtype": "float32",
         "sha256": checksum(scale, coeffs),
         "fit": fit.settings,
-        "fit_summary": fit.summary(),
-        "roundtrip_grid33_encoded": roundtrip_statistics(de_grid, grid),
-        "roundtrip_random_1e5_linear": roundtrip_statistics(de_rnd, rnd),
+        "fit_summary": summary,
+        **measure(fit.lut),
         "created_by": f"radiometria {importlib.metadata.version('radiometria')}",
     }
-
-    def write(f):
-        planes = encode_planes(coeffs)
-        np.savez_compressed(
-            f, scale=scale, coeffs_planes=planes, metadata=np.asarray(json.dumps(meta))
-        )
-
-    atomic_write(out, write)
-    return meta
+    arrays = {
+        "scale": scale,
+        "coeffs_planes": encode_planes(coeffs),
+        "metadata": np.asarray(json.dumps(meta, sort_keys=True)),
+    }
+    write_npz_deterministic(out, arrays, mode=0o644)
+    print(f"{name}: fit {fit.seconds:.1f} s", file=sys.stderr)
+    return {**meta, "file_sha256": hashlib.sha256(out.read_bytes()).hexdigest()}
 
 
 if __name__ == "__main__":
-    meta = build_data(sys.argv[1] if len(sys.argv) > 1 else None)
-    print(json.dumps({k: meta[k] for k in meta if k != "fit"}, indent=2))
+    from ._cli import _use_all_cpu_cores
+
+    _use_all_cpu_cores()
+    spaces = sys.argv[1:] or list(PACKAGED_FILES)
+    for sp in spaces:
+        meta = build_data(sp)
+        print(json.dumps({k: meta[k] for k in meta if k != "fit"}, indent=2))

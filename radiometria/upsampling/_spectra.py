@@ -14,6 +14,16 @@ sigmoid room on both sides; the spectrum is multiplied back by that scale.
   (1, 1, 1) is the space's white light with Y = 1 when XYZ is computed as
   $\int L \bar x\,d\lambda / \int \bar y\,d\lambda$.
 
+**Outside 360-830 nm.** The table is fitted on 360-830 nm (the CMFs' range, where the
+forward model integrates), but the spectra accept any wavelength. `RGBAlbedoSpectrum` and
+`RGBUnboundedSpectrum` continue the same sigmoid polynomial (as pbrt-v4's
+`RGBAlbedoSpectrum::operator()`, which evaluates `RGBSigmoidPolynomial` at any lambda): values
+stay in [0, 1] and [0, m] and finite (the stable sigmoid maps a huge polynomial value to 0 or
+1), and greys stay exactly flat. No colour constrains those values (the CMFs are 0 there), so a
+renderer that samples wavelengths outside 360-830 nm gets a smooth extrapolation, not data.
+`RGBIlluminantSpectrum` is 0 outside 360-830 nm, because the illuminant table ends there
+(Mitsuba 3 returns 0 for every upsampled spectrum outside the range; its issue #1771).
+
 All three are `radiometry.AbstractSpectrum` Modules holding only arrays (nm coefficients,
 scales, the illuminant table): batches of colours are one object, and they pass through
 `jit`, `vmap` and `grad` (the lookup is differentiable in rgb).
@@ -70,7 +80,8 @@ class RGBAlbedoSpectrum(AbstractSpectrum):
     - `rgb`: linear RGB (..., 3), components in [0, 1] (checked; `eqx.error_if` under jit). [-]
 
     Calling with wavelengths (..., n_lambda) [nm] gives values in [0, 1] of shape
-    `broadcast((*batch, 1), wavelength_nm.shape)` [-].
+    `broadcast((*batch, 1), wavelength_nm.shape)` [-]; outside 360-830 nm the same sigmoid
+    polynomial continued (module docstring).
 
     !!! note "Thesis"
         Eq. 2.25-2.27, section 2.2.3.
@@ -93,7 +104,8 @@ class RGBUnboundedSpectrum(AbstractSpectrum):
 
     $S(\lambda) = m\, s(c(\mathrm{rgb}/m)\cdot(\lambda^2, \lambda, 1))$ with
     $m = 2\max(r, g, b)$: the colour is looked up at half brightness and scaled back, so
-    values are in $[0, m]$ (thesis section 2.2.3, the note on values > 1). Black gives 0.
+    values are in $[0, m]$ (thesis section 2.2.3, the note on values > 1), at any wavelength
+    (outside 360-830 nm the polynomial continued, module docstring). Black gives 0.
 
     **Arguments:**
 
