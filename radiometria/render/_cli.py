@@ -15,8 +15,8 @@ from pathlib import Path
 from ..camera import write_exr, write_png
 from ._driver import RenderInterrupted, render
 from ._integrators import AbstractIntegrator
-from ._registry import INTEGRATORS, SAMPLERS
-from ._scenes import load_scene
+from ._registry import SAMPLERS
+from ._scenes import load_scene, scene_integrator
 
 __all__ = ["MAX_IMAGE_SIDE", "demo_render", "render_command"]
 
@@ -65,16 +65,13 @@ def _write(path: Path, rgb, metadata: dict) -> Path:
 
 def _integrator(description, name: str | None, max_depth: int | None) -> AbstractIntegrator:
     """The integrator of `--integrator` (default: the scene's), with `--max-depth` applied."""
-    name = description.integrator if name is None else name
-    if name not in INTEGRATORS:
-        raise ValueError(f"--integrator must be one of {sorted(INTEGRATORS)}, got {name!r}.")
-    cls = INTEGRATORS[name]
-    depth = description.max_depth if max_depth is None else max_depth
-    params = {"max_depth": -1 if depth is None else depth, "rr_depth": description.rr_depth}
-    if max_depth is not None and "max_depth" not in cls.PARAMETERS:
-        raise ValueError(f"--max-depth does not apply to the {name!r} integrator.")
-    params = {k: v for k, v in params.items() if k in cls.PARAMETERS}
-    return cls.from_properties(params, where=f"--integrator {name}")
+    try:
+        return scene_integrator(description, name=name, max_depth=max_depth)
+    except ValueError as e:
+        msg = str(e)
+        if msg.startswith(("integrator ", "max_depth ")):  # name the flag the user typed
+            msg = "--" + msg.replace("max_depth", "max-depth", 1)
+        raise ValueError(msg) from None
 
 
 def _render_to(

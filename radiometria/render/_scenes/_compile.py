@@ -47,13 +47,18 @@ def scene_filter(description: SceneDescription) -> AbstractFilter:
     return FILTERS[film.filter](*args)
 
 
-def scene_integrator(description: SceneDescription) -> AbstractIntegrator:
+def scene_integrator(
+    description: SceneDescription, *, name: str | None = None, max_depth: int | None = None
+) -> AbstractIntegrator:
     """The integrator the scene file asks for (`INTEGRATORS` registry), with its settings.
 
     **Arguments:**
 
     - `description`: a `SceneDescription` (its `integrator` name, `max_depth` and `rr_depth`
         [path segments]; an unbounded depth becomes 64 segments).
+    - `name`: another integrator of the registry instead of the file's (`--integrator`).
+    - `max_depth`: a depth instead of the file's (`--max-depth`) [path segments]; a
+        `ValueError` for an integrator without one.
 
     **Returns:**
 
@@ -62,12 +67,17 @@ def scene_integrator(description: SceneDescription) -> AbstractIntegrator:
     !!! note "Thesis"
         Chapters 8-9 (light transport).
     """
-    depth = description.max_depth
+    name = description.integrator if name is None else name
+    if name not in INTEGRATORS:
+        raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, got {name!r}.")
+    cls = INTEGRATORS[name]
+    if max_depth is not None and "max_depth" not in cls.PARAMETERS:
+        raise ValueError(f"max_depth does not apply to the {name!r} integrator.")
+    depth = description.max_depth if max_depth is None else max_depth
     params = {
         "max_depth": DEFAULT_UNBOUNDED_DEPTH if depth is None else depth,
         "rr_depth": description.rr_depth,
     }
-    cls = INTEGRATORS[description.integrator]
     params = {k: v for k, v in params.items() if k in cls.PARAMETERS}
     return cls.from_properties(params, where=description.source or "scene")
 
