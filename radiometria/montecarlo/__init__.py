@@ -11,7 +11,8 @@ in from `Pharr2023` (ch. 2 and 8), `Owen2013` and `Veach1997`:
   `sample_X` / `X_pdf` / `invert_X_sample` triad;
 - estimators that return an `Estimate` (mean, variance, standard error), variance reduction,
   MIS heuristics, and `integrate`;
-- statistical tools: `chi2_test` and `convergence_study`.
+- statistical tools: `chi2_test`, `pixel_z_test` (an image against a reference) and
+  `convergence_study`.
 """
 
 from ._chi2 import Chi2Result as Chi2Result, chi2_test as chi2_test
@@ -92,3 +93,4 @@ from ._warps import (
     uniform_triangle_pdf as uniform_triangle_pdf,
     visible_wavelengths_pdf as visible_wavelengths_pdf,
 )
+from ._ztest import ZTestResult as ZTestResult, pixel_z_test as pixel_z_test
