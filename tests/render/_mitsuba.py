@@ -2,6 +2,10 @@
 
 `cornell_box_xml()` writes Mitsuba 3's `cornell_box()` scene as a Mitsuba XML file (shapes with
 their `to_world` matrices), which both Mitsuba and `radiometria.render.load_scene` read.
+`mitsuba_moments` renders a scene with Mitsuba's `moment` integrator (the mean and per-sample
+variance of every pixel, in CIE XYZ) and `z_test_against_mitsuba` renders the same file with
+`radiometria.render.render` and applies `radiometria.montecarlo.pixel_z_test`, the test of
+Mitsuba's own render suite.
 """
 
 import numpy as np
@@ -33,6 +37,36 @@ def render_mitsuba(scene_or_dict, spp: int, seed: int = 0) -> np.ndarray:
 
     scene = mi.load_dict(scene_or_dict) if isinstance(scene_or_dict, dict) else scene_or_dict
     return np.asarray(mi.render(scene, spp=spp, seed=seed), np.float64)
+
+
+def mitsuba_moments(path, spp: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba's mean and per-sample variance of every pixel, CIE XYZ `(H, W, 3)` each.
+
+    The scene file's integrator is wrapped in a `moment` integrator, whose outputs are the
+    filter-weighted first and second moments of the samples of each pixel (in XYZ, the only
+    space in which the moments exist per channel); variance = m2 - m1^2.
+    """
+    mi = mitsuba()
+    scene = mi.load_file(str(path))
+    moment = mi.load_dict({"type": "moment", "nested": scene.integrator()})
+    out = np.asarray(mi.render(scene, integrator=moment, spp=spp, seed=seed), np.float64)
+    assert out.shape[-1] == 9, out.shape  # RGB, nested m1 (XYZ), nested m2 (XYZ)
+    m1, m2 = out[..., 3:6], out[..., 6:9]
+    return m1, np.maximum(m2 - m1 * m1, 0.0)
+
+
+def z_test_against_mitsuba(
+    path, *, spp: int, ref_spp: int, seed: int = 0, ref_seed: int = 1, **render_kwargs
+):
+    """Render `path` with radiometria (XYZ, independent samples by default) and with Mitsuba
+    (`mitsuba_moments`), and return `pixel_z_test(ours, mean, variance, spp, ref_spp)`."""
+    from radiometria.montecarlo import pixel_z_test
+    from radiometria.render import render
+
+    mean, var = mitsuba_moments(path, ref_spp, seed=ref_seed)
+    render_kwargs.setdefault("progress", False)
+    ours = np.asarray(render(path, spp=spp, seed=seed, return_xyz=True, **render_kwargs))
+    return pixel_z_test(ours.astype(np.float64), mean, var, spp, ref_spp)
 
 
 def _matrix(m) -> str:

@@ -7,14 +7,17 @@ makes the full 256 x 256 comparison. Mitsuba is a test dependency (`pip install 
 import numpy as np
 import pytest
 
+from radiometria.montecarlo import pixel_z_test
 from radiometria.render import OwenSobol, render
 
 from ._mitsuba import (
     cornell_box_materials_xml,
     cornell_box_xml,
     cornell_dict,
+    mitsuba_moments,
     rel_mse,
     render_mitsuba,
+    z_test_against_mitsuba,
 )
 
 mi = pytest.importorskip("mitsuba", reason="Mitsuba 3 is the optional reference renderer")
@@ -71,3 +74,23 @@ def test_mirror_gold_and_glass_match_mitsuba(tmp_path):
     theirs = render_mitsuba(mi.load_file(str(path)), 2 * REF_SPP, seed=4)
     ours = np.asarray(render(path, spp=512, sampler=OwenSobol(), progress=False))
     np.testing.assert_allclose(ours.mean(axis=(0, 1)), theirs.mean(axis=(0, 1)), rtol=0.02)
+
+
+@pytest.mark.slow
+def test_cornell_box_passes_mitsubas_pixel_z_test(tmp_path):
+    """Every pixel of a 16 x 16 Cornell box against Mitsuba's mean and per-sample variance;
+    the same box with the white reflectance 10 % darker (only in our file) fails the test."""
+    path = tmp_path / "cornell_box.xml"
+    xml = cornell_box_xml(16, 16)
+    path.write_text(xml)
+    res = z_test_against_mitsuba(path, spp=256, ref_spp=4096)
+    assert res.passed, res.message
+
+    white = xml.split('id="white"><rgb name="reflectance" value="')[1].split('"')[0]
+    darker = " ".join(str(0.9 * float(v)) for v in white.split())
+    dark = tmp_path / "dark.xml"
+    dark.write_text(xml.replace(f'value="{white}"', f'value="{darker}"'))
+    mean, var = mitsuba_moments(path, 4096, seed=1)
+    ours = np.asarray(render(dark, spp=256, return_xyz=True, progress=False), np.float64)
+    res = pixel_z_test(ours, mean, var, 256, 4096)
+    assert not res.passed, res.message
