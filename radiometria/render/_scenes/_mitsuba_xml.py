@@ -3,8 +3,14 @@
 `load_mitsuba_xml` reads the part of Mitsuba 3's scene format that the renderer can represent,
 and rejects everything else with an error that names the file, the line and the tag:
 
-- `scene`: the `version` attribute; `<default name value>` and `$name` substitution in
-  attribute values.
+- `scene`: the `version` attribute; `<default name value>` (a value the caller passes,
+  `params=` or `radiometria render -D name=value`, wins) and `$name` substitution in every
+  attribute of every element; `<path value>` (a search folder, relative to the file that
+  names it); `<include filename>` (an XML file whose `<scene>` children are read in its
+  place; a cycle is an error that lists the files); `id` on any object (a second use of an
+  id is an error) and `<ref id>` where a BSDF goes (a shape, `twosided`).
+- file names (meshes, spectra, includes) resolve against the folder of the file that names
+  them, then the `<path>` folders (the latest first), then the scene file's folder.
 - `shape`: `obj`, `ply` (`filename`), `rectangle` ([-1, 1]^2 at z = 0, normal +z), `cube`
   ([-1, 1]^3), `sphere` (`center`, `radius`; triangulated as an icosphere of
   `SPHERE_SUBDIVISIONS` = 4 subdivisions, 5120 triangles); `to_world`, `flip_normals`,
@@ -24,9 +30,11 @@ and rejects everything else with an error that names the file, the line and the 
   `tent`, `gaussian`, `mitchell`, `catmullrom` or `lanczos` with its parameters.
 - `sampler`: any type; `sample_count` becomes the scene's `spp`.
 - `integrator`: every plugin of `radiometria.render._registry.INTEGRATORS`: `path` with
-  `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters` (ignored); `direct`.
+  `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters` (ignored); `direct`; `moment`
+  (Mitsuba's wrapper that adds the moments of its one nested integrator to the film) renders
+  its nested integrator.
 
-Textures, other plugins, `include`, shape groups and instances are not supported.
+Textures, other plugins, shape groups and instances are not supported.
 """
 
 import math
@@ -38,11 +46,13 @@ import numpy as np
 
 from ...radiometry import AbstractSpectrum, BlackbodySpectrum, PiecewiseLinearSpectrum
 from .._geometry._mesh import icosphere
+from .._lights import read_envmap
 from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS
 from .._spectral import LinearRGB, SpectralValue
 from ._description import (
     CameraDescription,
     FilmDescription,
+    LightDescription,
     Material,
     SceneDescription,
     SceneError,
@@ -69,6 +79,7 @@ class _Node:
     attrib: dict
     line: int
     children: list = field(default_factory=list)
+    file: str = ""  # the file the element is in (the scene file or an included one)
 
 
 def _parse_xml(text: str, file: str) -> _Node:
@@ -77,7 +88,7 @@ def _parse_xml(text: str, file: str) -> _Node:
     root: list[_Node] = []
 
     def start(tag, attrib):
-        node = _Node(tag, dict(attrib), parser.CurrentLineNumber)
+        node = _Node(tag, dict(attrib), parser.CurrentLineNumber, file=file)
         if stack:
             stack[-1].children.append(node)
         else:
@@ -105,10 +116,26 @@ class _Ctx:
     def __init__(self, file: str, base: Path, params: dict):
         self.file, self.base, self.params = file, base, params
         self.refs: dict[str, tuple[_Node, object]] = {}
+        self.ids: dict[str, _Node] = {}  # every id in the scene, for duplicates
+        self.search: list[Path] = []  # <path> folders, the latest first
 
     def err(self, node: _Node, msg: str) -> SceneError:
         name = f" name='{node.attrib['name']}'" if "name" in node.attrib else ""
-        return SceneError(f"{self.file}:{node.line}: <{node.tag}{name}>: {msg}")
+        return SceneError(f"{node.file or self.file}:{node.line}: <{node.tag}{name}>: {msg}")
+
+    def resolve(self, node: _Node, filename: str) -> Path:
+        """A file a scene names: absolute, or relative to the folder of the file that names
+        it, then to the `<path>` folders (the latest first), then to the scene file's folder.
+        A name found nowhere resolves against the naming file's folder (so that the error
+        about the missing file names that path)."""
+        path = Path(filename)
+        if path.is_absolute():
+            return path
+        own = Path(node.file).parent if node.file else self.base
+        for folder in (own, *self.search, self.base):
+            if (folder / path).exists():
+                return folder / path
+        return own / path
 
     def attr(self, node: _Node, key: str, default=None) -> str:
         if key not in node.attrib:
@@ -216,7 +243,7 @@ def _spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
         samples = value.values
     else:
         samples = value.scale
-    where = f"{ctx.file}:{node.line}: parameter '{node.attrib.get('name', node.tag)}'"
+    where = f"{node.file or ctx.file}:{node.line}: parameter '{node.attrib.get('name', node.tag)}'"
     check_spectral_values(samples, where)
     return value
 
@@ -228,7 +255,10 @@ def _parse_spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
             srgb = np.array([int(text[i : i + 2], 16) / 255.0 for i in (1, 3, 5)])
             lin = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
             return LinearRGB(lin)
-        return LinearRGB(ctx.floats(node, text, 3))
+        rgb = ctx.floats(node, text)
+        if rgb.size not in (1, 3):
+            raise ctx.err(node, f"expected 1 or 3 numbers, got {rgb.size} in {text!r}")
+        return LinearRGB(np.broadcast_to(rgb, (3,)))  # one value: a grey, as Mitsuba reads it
     if node.tag == "float":
         return float(ctx.floats(node, ctx.attr(node, "value"), 1)[0])
     if node.tag == "blackbody":  # Mitsuba 0.6
@@ -382,12 +412,16 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
     kind = ctx.attr(node, "type")
     name = node.attrib.get("id", name) or f"bsdf@{node.line}"
     if kind == "twosided":
-        _only_children(ctx, node, {"bsdf"})
-        inner = [c for c in node.children if c.tag == "bsdf"]
+        _only_children(ctx, node, {"bsdf", "ref"})
+        inner = [c for c in node.children if c.tag in ("bsdf", "ref")]
         if len(inner) != 1:
-            raise ctx.err(node, "a twosided BSDF with one nested <bsdf> is supported")
-        if [c for c in node.children if c.tag != "bsdf"]:
+            raise ctx.err(node, "a twosided BSDF with one nested <bsdf> or <ref> is supported")
+        if [c for c in node.children if c.tag not in ("bsdf", "ref")]:
             raise ctx.err(node, "twosided takes no parameters here")
+        if inner[0].tag == "ref":  # a two-sided copy; the referenced BSDF stays one-sided
+            m = materials[_ref(ctx, inner[0], "bsdf")]
+            materials.append(Material(m.type, m.params, two_sided=True, name=name))
+            return len(materials) - 1
         idx = _bsdf(ctx, inner[0], materials, name)
         m = materials[idx]
         materials[idx] = Material(m.type, m.params, two_sided=True, name=name)
@@ -405,6 +439,24 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
     return len(materials) - 1
 
 
+def _ref(ctx: _Ctx, node: _Node, kind: str):
+    """The object a `<ref id>` names, which must be a `kind` (e.g. `"bsdf"`) defined before."""
+    _only_attributes(ctx, node, {"id", "name"})
+    rid = ctx.attr(node, "id")
+    if rid not in ctx.refs:
+        if rid in ctx.ids:
+            other = ctx.ids[rid]
+            raise ctx.err(
+                node, f"'{rid}' (the <{other.tag}> at {other.file}:{other.line}) cannot be "
+                f"referenced here; a <{kind}> is needed, defined at the top level before its use"
+            )  # fmt: skip
+        raise ctx.err(node, f"unknown id '{rid}' (define it before its use)")
+    ref_node, ref_value = ctx.refs[rid]
+    if ref_node.tag != kind:
+        raise ctx.err(node, f"'{rid}' is a <{ref_node.tag}>; a <{kind}> is needed here")
+    return ref_value
+
+
 def _plugin(ctx: _Ctx, node: _Node, registry: dict, what: str) -> tuple[str, dict]:
     """The plugin a tag names (a key of one of the renderer's registries) and its parameters,
     checked against the names the plugin declares."""
@@ -419,10 +471,39 @@ def _plugin(ctx: _Ctx, node: _Node, registry: dict, what: str) -> tuple[str, dic
 
 
 def _emitter(ctx: _Ctx, node: _Node) -> dict:
-    _, props = _plugin(ctx, node, LIGHTS, "emitter (inside a <shape>)")
+    """An `area` emitter inside a shape (the shape's triangles emit)."""
+    _, props = _plugin(ctx, node, {"area": LIGHTS["area"]}, "emitter (inside a <shape>)")
     if "radiance" not in props:
         raise ctx.err(node, "an area emitter needs a 'radiance'")
     return {"radiance": props["radiance"], "two_sided": False}
+
+
+def _light(ctx: _Ctx, node: _Node) -> LightDescription:
+    """An emitter outside a shape: `point`, `spot`, `directional`, `constant`, `envmap` with
+    the parameters its plugin declares; an envmap's image is read here (`read_envmap`), so
+    that a missing, non-equirectangular or invalid file is named with this line."""
+    lights = {k: v for k, v in LIGHTS.items() if k != "area"}
+    kind, props = _plugin(ctx, node, lights, "emitter (outside a <shape>)")
+    where = f"{node.file or ctx.file}:{node.line}: <emitter type='{kind}'>"
+    if kind == "envmap":
+        if "filename" not in props:
+            raise ctx.err(node, "an envmap emitter needs a 'filename'")
+        path = ctx.resolve(node, props["filename"])
+        try:
+            props["data"] = read_envmap(path, f"{where} parameter 'filename'")
+        except ValueError as e:
+            raise SceneError(str(e)) from None
+        props["filename"] = str(path)
+        scale = props.get("scale", 1.0)
+        if not (isinstance(scale, float) and np.isfinite(scale) and scale >= 0):
+            raise ctx.err(node, f"parameter 'scale' must be a finite float >= 0, got {scale!r}")
+    else:  # the plugin's own checks (angles, directions, transforms), with this line named
+        try:
+            LIGHTS[kind].from_properties([props], where=[where])
+        except ValueError as e:
+            raise SceneError(str(e)) from None
+    return LightDescription(kind, props, name=node.attrib.get("id", f"{kind}@{node.line}"),
+                            where=where)  # fmt: skip
 
 
 _RECT_V = np.array([[-1, -1, 0], [1, -1, 0], [-1, 1, 0], [1, 1, 0]], dtype=np.float64)
@@ -453,14 +534,12 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
         )  # fmt: skip
     _only_children(ctx, node, {"bsdf", "emitter", "ref"})
     props = _properties(ctx, node, _SHAPE_PARAMS[kind])
-    where = f"{ctx.file}:{node.line}: shape '{node.attrib.get('id', kind)}'"
+    where = f"{node.file or ctx.file}:{node.line}: shape '{node.attrib.get('id', kind)}'"
     if kind in ("obj", "ply"):
         if "filename" not in props:
             raise ctx.err(node, f"a '{kind}' shape needs a 'filename'")
-        path = Path(props["filename"])
-        if not path.is_absolute():
-            path = ctx.base / path
-        v, f = read_mesh(path, f"{ctx.file}:{node.line}: ")
+        path = ctx.resolve(node, props["filename"])
+        v, f = read_mesh(path, f"{node.file or ctx.file}:{node.line}: ")
     elif kind == "rectangle":
         v, f = _RECT_V.copy(), _RECT_F.copy()
     elif kind == "cube":
@@ -484,15 +563,9 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
                 raise ctx.err(ch, "a shape takes one BSDF")
             material = _bsdf(ctx, ch, materials)
         elif ch.tag == "ref":
-            rid = ctx.attr(ch, "id")
-            if rid not in ctx.refs:
-                raise ctx.err(ch, f"unknown id '{rid}' (define it before its use)")
-            ref_node, ref_value = ctx.refs[rid]
-            if ref_node.tag != "bsdf":
-                raise ctx.err(ch, f"'{rid}' is a <{ref_node.tag}>; only BSDFs can be referenced")
             if material is not None:
                 raise ctx.err(ch, "a shape takes one BSDF")
-            material = ref_value
+            material = _ref(ctx, ch, "bsdf")
         elif ch.tag == "emitter":
             if emitter is not None:
                 raise ctx.err(ch, "a shape takes one emitter")
@@ -580,6 +653,91 @@ def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
     return FilmDescription(width=width, height=height, filter=kind_f, filter_params=params)
 
 
+# ---------------------------------------------------------------------------------------------
+# Scene-level structure: <default>, <path>, <include>, $name substitution, ids
+
+_MAX_INCLUDE_DEPTH = 32
+
+
+def _collect(ctx: _Ctx, root: _Node, chain: tuple[Path, ...], out: list[_Node], cli: set):
+    """Walk the top level of `root` in document order: record `<default>`s (a value given by
+    the caller wins), add `<path>` folders, inline the children of `<include>`d files (their
+    relative names resolve against their own folder), and append every other element to
+    `out`."""
+    for ch in root.children:
+        if ch.tag == "default":
+            _only_attributes(ctx, ch, {"name", "value"})
+            name = ch.attrib.get("name")
+            if not name or "value" not in ch.attrib:
+                raise ctx.err(ch, "a <default> needs a 'name' and a 'value'")
+            if name not in cli:
+                ctx.params[name] = ch.attrib["value"]
+        elif ch.tag == "path":
+            _only_attributes(ctx, ch, {"value"})
+            folder = Path(ctx.attr(ch, "value"))
+            if not folder.is_absolute():
+                folder = Path(ch.file).parent / folder
+            if not folder.is_dir():
+                raise ctx.err(ch, f"the search path {str(folder)!r} is not a folder")
+            ctx.search.insert(0, folder)
+        elif ch.tag == "include":
+            _only_attributes(ctx, ch, {"filename"})
+            target = ctx.resolve(ch, ctx.attr(ch, "filename"))
+            key = target.resolve()
+            if key in chain:
+                names = " -> ".join(str(p) for p in (*chain[chain.index(key) :], key))
+                raise ctx.err(ch, f"include cycle: {names}")
+            if len(chain) > _MAX_INCLUDE_DEPTH:
+                raise ctx.err(ch, f"includes nested deeper than {_MAX_INCLUDE_DEPTH} files")
+            if not target.is_file():
+                raise FileNotFoundError(f"{ch.file}:{ch.line}: <include>: no file {str(target)!r}")
+            if target.suffix.lower() != ".xml":
+                raise ctx.err(ch, f"only XML files can be included, got {str(target)!r}")
+            sub = _parse_xml(read_scene_text(target), str(target))
+            if sub.tag != "scene":
+                raise ctx.err(sub, f"an included file's root must be <scene>, got <{sub.tag}>")
+            _collect(ctx, sub, (*chain, key), out, cli)
+        else:
+            out.append(ch)
+
+
+def _only_attributes(ctx: _Ctx, node: _Node, allowed: set[str]) -> None:
+    for key in node.attrib:
+        if key not in allowed:
+            raise ctx.err(node, f"unknown attribute '{key}'; valid: {sorted(allowed)}")
+
+
+def _substitute(ctx: _Ctx, node: _Node) -> None:
+    """`$name` -> its value in every attribute of `node` and its descendants, and the ids
+    recorded (a second element with one id is an error)."""
+    node.attrib = {k: ctx.subst(node, v) for k, v in node.attrib.items()}
+    if "id" in node.attrib and node.tag != "ref":
+        rid = node.attrib["id"]
+        if rid in ctx.ids:
+            first = ctx.ids[rid]
+            raise ctx.err(node, f"duplicate id '{rid}' (first at {first.file}:{first.line})")
+        ctx.ids[rid] = node
+    for ch in node.children:
+        _substitute(ctx, ch)
+
+
+def _integrator(ctx: _Ctx, node: _Node) -> tuple[str, dict]:
+    """An `<integrator>`; a `moment` wrapper renders its one nested integrator (the moments
+    themselves are an output of Mitsuba's film that this renderer does not produce)."""
+    if ctx.attr(node, "type") == "moment":
+        _only_children(ctx, node, {"integrator"})
+        nested = [c for c in node.children if c.tag == "integrator"]
+        if len(nested) != 1 or len(nested) != len(node.children):
+            raise ctx.err(node, "a 'moment' integrator needs exactly one nested <integrator>")
+        return _integrator(ctx, nested[0])
+    kind, p = _plugin(ctx, node, INTEGRATORS, "integrator")
+    try:
+        INTEGRATORS[kind].from_properties(p, where=f"{node.file or ctx.file}:{node.line}")
+    except ValueError as e:
+        raise SceneError(str(e)) from None
+    return kind, p
+
+
 def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     """Load a Mitsuba 3 XML scene (the subset in the module docstring of
     `radiometria.render._scenes._mitsuba_xml`) into a `SceneDescription`.
@@ -611,40 +769,37 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     text = read_scene_text(path)
     file = str(path)
     root = _parse_xml(text, file)
-    ctx = _Ctx(file, path.parent, {})
+    given = {str(k): str(v) for k, v in (params or {}).items()}
+    ctx = _Ctx(file, path.parent, dict(given))
     if root.tag != "scene":
         raise ctx.err(root, f"the root element must be <scene>, got <{root.tag}>")
-    for ch in root.children:
-        if ch.tag == "default":
-            ctx.params.setdefault(ctx.attr(ch, "name"), ch.attrib.get("value", ""))
-    for k, v in (params or {}).items():
-        ctx.params[k] = v
+    elements: list[_Node] = []
+    _collect(ctx, root, (path.resolve(),), elements, set(given))
+    for ch in elements:
+        _substitute(ctx, ch)
     materials: list[Material] = []
     default_material: list[int] = []
     shapes: list[ShapeDescription] = []
+    lights: list[LightDescription] = []
     camera = CameraDescription(to_world=np.eye(4), fov_deg=45.0, fov_axis="x")
     film = FilmDescription(width=768, height=576)
     spp = None
     max_depth: int | None = None
     rr_depth = 5
     integrator = "path"
-    for ch in root.children:
-        if ch.tag == "default":
-            continue
+    for ch in elements:
         if ch.tag == "bsdf":
             idx = _bsdf(ctx, ch, materials)
             if "id" in ch.attrib:
                 ctx.refs[ch.attrib["id"]] = (ch, idx)
         elif ch.tag == "shape":
             shapes.append(_shape(ctx, ch, materials, default_material))
+        elif ch.tag == "emitter":
+            lights.append(_light(ctx, ch))
         elif ch.tag == "sensor":
             camera, film, spp = _sensor(ctx, ch)
         elif ch.tag == "integrator":
-            integrator, p = _plugin(ctx, ch, INTEGRATORS, "integrator")
-            try:
-                INTEGRATORS[integrator].from_properties(p, where=f"{file}:{ch.line}")
-            except ValueError as e:
-                raise SceneError(str(e)) from None
+            integrator, p = _integrator(ctx, ch)
             md = p.get("max_depth", -1)
             if md == 0 or md < -1:
                 raise ctx.err(ch, f"max_depth must be -1 (unbounded) or >= 1, got {md}")
@@ -655,5 +810,5 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
             raise ctx.err(ch, f"unsupported tag <{ch.tag}{what}> at line {ch.line}")
     return assemble(
         shapes, materials, camera, film, max_depth=max_depth, rr_depth=rr_depth, spp=spp,
-        integrator=integrator, unit="file units", source=file,
+        integrator=integrator, unit="file units", source=file, lights=tuple(lights),
     )  # fmt: skip

@@ -1,0 +1,139 @@
+"""The Mitsuba 3 scene format's structure: `<path>`, `<include>`, `<default>` and `$name`,
+`<ref>`, ids, the `moment` wrapper; what the loader reads is checked against Mitsuba 3 reading
+the same files where Mitsuba is installed."""
+
+import numpy as np
+import pytest
+
+from radiometria.render import SceneError, load_scene
+from radiometria.render._scenes._mitsuba_xml import load_mitsuba_xml
+
+OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+
+def _scene(body: str, version: str = "3.0.0") -> str:
+    return f'<scene version="{version}">\n{body}\n</scene>\n'
+
+
+def _write(path, text):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture
+def tree(tmp_path):
+    """main.xml includes parts/materials.xml (which includes parts/deeper/light.xml) and finds
+    `tri.obj` through a <path>; the included files name files relative to their own folder."""
+    _write(tmp_path / "meshes" / "tri.obj", OBJ)
+    _write(tmp_path / "parts" / "deeper" / "quad.obj", OBJ + "v 1 1 0\nf 2 4 3\n")
+    _write(
+        tmp_path / "parts" / "materials.xml",
+        _scene(
+            '<bsdf type="diffuse" id="red"><rgb name="reflectance" value="$red, 0.1, 0.1"/>'
+            '</bsdf>\n<include filename="deeper/light.xml"/>'
+        ),
+    )
+    _write(
+        tmp_path / "parts" / "deeper" / "light.xml",
+        _scene(
+            '<shape type="obj" id="light"><string name="filename" value="quad.obj"/>'
+            '<emitter type="area"><rgb name="radiance" value="$power"/></emitter></shape>'
+        ),
+    )
+    return _write(
+        tmp_path / "main.xml",
+        _scene(
+            '<default name="red" value="0.8"/>\n<default name="power" value="4"/>\n'
+            '<default name="spp" value="8"/>\n<default name="kind" value="obj"/>\n'
+            '<default name="fov" value="30"/>\n<default name="depth" value="3"/>\n'
+            '<path value="meshes"/>\n<include filename="parts/materials.xml"/>\n'
+            '<bsdf type="twosided" id="red2"><ref id="red"/></bsdf>\n'
+            '<shape type="$kind" id="tri"><string name="filename" value="tri.obj"/>'
+            '<ref id="red2"/></shape>\n'
+            '<sensor type="perspective"><float name="fov" value="$fov"/>'
+            '<sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>'
+            '<film type="hdrfilm"><integer name="width" value="8"/>'
+            '<integer name="height" value="8"/></film></sensor>\n'
+            '<integrator type="moment"><integrator type="path">'
+            '<integer name="max_depth" value="$depth"/></integrator></integrator>'
+        ),
+    )
+
+
+def test_paths_includes_defaults_refs_and_moment(tree):
+    s = load_scene(tree)
+    assert s.shape_names == ("light", "tri")
+    assert s.n_triangles == 3
+    red, red2 = s.materials[0], s.materials[s.face_material[s.face_shape == 1][0]]
+    np.testing.assert_allclose(red.params["reflectance"].rgb, [0.8, 0.1, 0.1])
+    assert not red.two_sided and red2.two_sided and red2.params == red.params
+    np.testing.assert_allclose(s.emitters[0].radiance.rgb, [4.0, 4.0, 4.0])
+    assert (s.spp, s.camera.fov_deg, s.integrator, s.max_depth) == (8, 30.0, "path", 3)
+    # values given by the caller (radiometria render -D) win over <default>, in included files too
+    s = load_scene(tree, params={"red": 0.25, "spp": "2", "depth": 5})
+    np.testing.assert_allclose(s.materials[0].params["reflectance"].rgb, [0.25, 0.1, 0.1])
+    assert (s.spp, s.max_depth) == (2, 5)
+
+
+def test_mitsuba_reads_the_same_tree(tree):
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("scalar_rgb")
+    # Mitsuba instantiates shapes after parsing, with the main file's folder and the <path>
+    # folders only: an included file's mesh must lie there for it (we also look beside the
+    # including file first)
+    (tree.parent / "meshes" / "quad.obj").write_text(OBJ + "v 1 1 0\nf 2 4 3\n")
+    ms = mi.load_file(str(tree), red="0.25")
+    ours = load_scene(tree, params={"red": "0.25"})
+    assert sorted(sh.id() for sh in ms.shapes()) == sorted(ours.shape_names)
+    for shape in ms.shapes():
+        v = np.array(shape.vertex_positions_buffer()).reshape(-1, 3)
+        f = np.array(shape.faces_buffer()).reshape(-1, 3)
+        mine = ours.vertices[ours.faces[ours.face_shape == ours.shape_names.index(shape.id())]]
+        np.testing.assert_allclose(mine, v[f], atol=1e-6)
+    params = mi.traverse(ms)
+    key = next(k for k in params.keys() if k.endswith("reflectance.value"))
+    np.testing.assert_allclose(np.array(params[key]), [0.25, 0.1, 0.1], rtol=1e-6)
+    assert ms.sensors()[0].sampler().sample_count() == ours.spp
+
+
+def test_include_cycle_is_named(tmp_path):
+    a = _write(tmp_path / "a.xml", _scene('<include filename="sub/b.xml"/>'))
+    _write(tmp_path / "sub" / "b.xml", _scene('<include filename="../a.xml"/>'))
+    with pytest.raises(SceneError, match=r"b\.xml:2: <include>: include cycle: .*a\.xml -> "):
+        load_mitsuba_xml(a)
+    self_loop = _write(tmp_path / "c.xml", _scene('<include filename="c.xml"/>'))
+    with pytest.raises(SceneError, match="include cycle"):
+        load_mitsuba_xml(self_loop)
+
+
+@pytest.mark.parametrize(
+    ("body", "error", "match"),
+    [
+        ('<include filename="missing.xml"/>', FileNotFoundError, "missing.xml"),
+        ('<path value="no/such/folder"/>', SceneError, "search path"),
+        ('<default name="x"/>', SceneError, "needs a 'name' and a 'value'"),
+        ('<shape type="$nope"/>', SceneError, r":2: <shape>: no value for the parameter"),
+        (
+            '<bsdf type="diffuse" id="a"/><bsdf type="diffuse" id="a"/>',
+            SceneError,
+            "duplicate id 'a'",
+        ),
+        ('<shape type="cube"><ref id="ghost"/></shape>', SceneError, "unknown id 'ghost'"),
+        (
+            '<shape type="cube" id="c"/><shape type="cube"><ref id="c"/></shape>',
+            SceneError,
+            r"'c' \(the <shape> at .*\) cannot be referenced here; a <bsdf> is needed",
+        ),
+        (
+            '<integrator type="moment"/>',
+            SceneError,
+            "exactly one nested <integrator>",
+        ),
+        ('<include filename="x.xml" extra="1"/>', SceneError, "unknown attribute 'extra'"),
+    ],
+)
+def test_structure_errors_are_named(tmp_path, body, error, match):
+    path = _write(tmp_path / "s.xml", _scene(body))
+    with pytest.raises(error, match=match):
+        load_mitsuba_xml(path)
