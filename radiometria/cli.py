@@ -121,6 +121,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="random seed [0]")
     p.add_argument("--max-depth", type=int, default=None, help="maximum path depth [scene's]")
     p.add_argument(
+        "-D",
+        dest="define",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="set a Mitsuba XML <default> parameter ($NAME in the file); repeatable",
+    )
+    p.add_argument(
         "--integrator",
         default=None,
         help="integrator plugin: 'path' or 'direct' (radiometria.render._registry) [scene's]",

@@ -74,6 +74,17 @@ def _integrator(description, name: str | None, max_depth: int | None) -> Abstrac
         raise ValueError(msg) from None
 
 
+def _defines(items) -> dict[str, str]:
+    """`-D name=value` options as a dict (Mitsuba's flag for `<default>` parameters)."""
+    out = {}
+    for item in items or ():
+        name, sep, value = str(item).partition("=")
+        if not sep or not name.strip() or any(c.isspace() or c == "$" for c in name):
+            raise ValueError(f"-D expects NAME=VALUE (e.g. -D spp=64), got {item!r}.")
+        out[name] = value
+    return out
+
+
 def _render_to(
     scene_name: str,
     *,
@@ -85,13 +96,20 @@ def _render_to(
     integrator=None,
     sampler="independent",
     progress=True,
+    defines=None,
     **long_render,
 ):
     """Render a scene as the command line does; `long_render` are `render`'s checkpoint and
-    preview arguments."""
+    preview arguments, `defines` the `-D name=value` parameters of an XML scene."""
     if sampler not in SAMPLERS:
         raise ValueError(f"--sampler must be one of {sorted(SAMPLERS)}, got {sampler!r}.")
-    description = load_scene(scene_name)
+    params = _defines(defines)
+    if params and not str(scene_name).lower().endswith(".xml"):
+        raise ValueError(
+            f"-D {next(iter(params))}=... sets a Mitsuba XML <default>; {str(scene_name)!r} "
+            "is not an .xml scene."
+        )
+    description = load_scene(scene_name, params=params or None)
     chosen = _integrator(description, integrator, max_depth)
     rgb = render(
         description,
@@ -156,6 +174,7 @@ def render_command(args: argparse.Namespace) -> int:
             max_depth=max_depth,
             integrator=args.integrator,
             sampler=args.sampler,
+            defines=getattr(args, "define", None),
             checkpoint=checkpoint,
             checkpoint_every=args.checkpoint_every,
             resume=args.resume,

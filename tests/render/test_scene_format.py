@@ -137,3 +137,35 @@ def test_structure_errors_are_named(tmp_path, body, error, match):
     path = _write(tmp_path / "s.xml", _scene(body))
     with pytest.raises(error, match=match):
         load_mitsuba_xml(path)
+
+
+def _box_xml(tmp_path):
+    """A lit rectangle seen by a camera whose film width is the parameter $w."""
+    return _write(
+        tmp_path / "box.xml",
+        _scene(
+            '<default name="w" value="6"/>\n'
+            '<sensor type="perspective"><float name="fov" value="60"/>'
+            '<transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/>'
+            '</transform><film type="hdrfilm"><integer name="width" value="$w"/>'
+            '<integer name="height" value="2"/></film></sensor>\n'
+            '<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/>'
+            "</emitter></shape>"
+        ),
+    )
+
+
+@pytest.mark.slow
+def test_cli_define_sets_defaults(tmp_path, capsys):
+    """`radiometria render SCENE -D name=value` overrides the file's <default>."""
+    from radiometria.camera import read_exr
+    from radiometria.cli import main
+
+    scene, out = _box_xml(tmp_path), tmp_path / "img.exr"
+    assert main(["render", str(scene), "--spp", "1", "--out", str(out), "-D", "w=3"]) == 0
+    assert read_exr(out)[0].shape == (2, 3, 3)
+    assert main(["render", str(scene), "--spp", "1", "--out", str(out), "-D", "w"]) == 2
+    assert "-D expects NAME=VALUE" in capsys.readouterr().err
+    argv = ["render", "cornell-box", "--spp", "1", "--out", str(out), "-D", "w=3"]
+    assert main(argv) == 2
+    assert "is not an .xml scene" in capsys.readouterr().err
