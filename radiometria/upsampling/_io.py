@@ -41,8 +41,11 @@ the problem when something is wrong.
 import hashlib
 import importlib.metadata
 import json
+import math
+import re
 import struct
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -241,43 +244,142 @@ def decode_planes(planes: np.ndarray, shape) -> np.ndarray:
     return b.view("<f4").reshape(shape).astype(np.float32)
 
 
+MAX_RESOLUTION = 1024  # a res-1024 float32 table is 38.7 GB; nothing larger is read
+METADATA_MAX_BYTES = 1 << 20
+# A member that inflates more than this ratio and past this size is refused as a zip bomb
+# (float tables compress about 1.5:1; a table of zeros that large is not a fitted table).
+ZIP_BOMB_RATIO, ZIP_BOMB_MIN_BYTES = 100, 1 << 28
+
+
+def _npy_header(path: Path, zf: zipfile.ZipFile, name: str) -> tuple[tuple, np.dtype, int]:
+    """(shape, dtype, data bytes the member holds) of `name.npy`, read from its header only."""
+    info = zf.getinfo(name + ".npy")
+    if info.file_size > ZIP_BOMB_MIN_BYTES and info.file_size > ZIP_BOMB_RATIO * max(
+        info.compress_size, 1
+    ):
+        _fail(
+            path, f"`{name}` inflates from {info.compress_size:,} to {info.file_size:,} bytes "
+            "(a zip bomb?); refused before reading."
+        )  # fmt: skip
+    with zf.open(info) as fp:
+        version = np.lib.format.read_magic(fp)
+        if version == (1, 0):
+            shape, _, dtype = np.lib.format.read_array_header_1_0(fp)
+        elif version == (2, 0):
+            shape, _, dtype = np.lib.format.read_array_header_2_0(fp)
+        else:
+            _fail(path, f"`{name}` uses .npy format version {version}; only 1.0 and 2.0 are read.")
+        return shape, dtype, info.file_size - fp.tell()
+
+
+def _check_declared(path: Path, zf: zipfile.ZipFile, files: set, coeffs_name: str) -> None:
+    """Refuse wrong shapes, dtypes and sizes from the .npy headers, before reading any data."""
+    declared = {
+        n: _npy_header(path, zf, n) for n in ("scale", coeffs_name, "metadata") if n in files
+    }
+    for name, (shape, dtype, available) in declared.items():
+        nbytes = math.prod(shape) * dtype.itemsize
+        if nbytes > available:
+            _fail(
+                path, f"`{name}` declares shape {shape} of {dtype} ({nbytes:,} bytes), but the "
+                f"file holds {available:,} bytes for it (truncated or corrupt)."
+            )  # fmt: skip
+    shape, dtype, _ = declared["scale"]
+    if len(shape) != 1 or not 2 <= shape[0] <= MAX_RESOLUTION or dtype.kind != "f":
+        _fail(
+            path, f"`scale` must be a float array of shape (res,) with 2 <= res <= "
+            f"{MAX_RESOLUTION}; its header declares {dtype} {shape}."
+        )  # fmt: skip
+    res = shape[0]
+    shape, dtype, _ = declared[coeffs_name]
+    planes = coeffs_name == "coeffs_planes"
+    want = (4, 9 * res**3) if planes else (3, res, res, res, 3)
+    if shape != want or (dtype != np.uint8 if planes else dtype.kind != "f"):
+        _fail(
+            path, f"`{coeffs_name}` must be {'uint8' if planes else 'float'} of shape "
+            f"{want} (res {res}); its header declares {dtype} {shape}."
+        )  # fmt: skip
+    if "metadata" in declared:
+        shape, dtype, _ = declared["metadata"]
+        nbytes = math.prod(shape) * dtype.itemsize
+        if dtype.kind not in "US" or math.prod(shape) != 1 or nbytes > METADATA_MAX_BYTES:
+            _fail(
+                path, "`metadata` must be one JSON string (0-d or shape (1,), at most "
+                f"{METADATA_MAX_BYTES:,} bytes); its header declares {dtype} {shape}."
+            )  # fmt: skip
+
+
+def _check_metadata(path: Path, meta, res: int) -> dict:
+    """Validate the fields of a `.npz` table's metadata that `load_lut` uses."""
+    if not isinstance(meta, dict):
+        _fail(path, f"`metadata` must be a JSON object, found {type(meta).__name__}.")
+    fmt = meta.get("format")
+    if fmt is not None and fmt not in (FORMAT_NAME, FORMAT_NAME + "-planes"):
+        _fail(path, f"metadata `format` {fmt!r} is not {FORMAT_NAME!r}.")
+    version = meta.get("version", FORMAT_VERSION)
+    if not isinstance(version, int) or isinstance(version, bool) or not 1 <= version:
+        _fail(path, f"metadata `version` must be an integer >= 1, found {version!r}.")
+    if version > FORMAT_VERSION:
+        _fail(
+            path, f"metadata `version` {version} is newer than this reader's {FORMAT_VERSION}; "
+            "update radiometria."
+        )  # fmt: skip
+    sha = meta.get("sha256")
+    if sha is not None and not (isinstance(sha, str) and re.fullmatch(r"[0-9a-f]{64}", sha)):
+        _fail(path, f"metadata `sha256` must be 64 lowercase hex digits, found {sha!r:.80}.")
+    resolution = meta.get("resolution", res)
+    if resolution != res or isinstance(resolution, bool):
+        _fail(path, f"metadata `resolution` {resolution!r:.40} != array resolution {res}.")
+    cs = meta.get("colourspace", "sRGB")
+    if not isinstance(cs, str) or cs not in RGB_COLOURSPACES:
+        _fail(
+            path, f"metadata `colourspace` {cs!r:.80} is not one of {sorted(RGB_COLOURSPACES)}."
+        )  # fmt: skip
+    return meta
+
+
 def _load_npz(path: Path):
+    with open(path, "rb") as fh:
+        magic = fh.read(4)
+    if magic not in (b"PK\x03\x04", b"PK\x05\x06"):
+        _fail(
+            path, f"not a readable .npz file: it starts with {magic!r}, not a zip archive's "
+            "b'PK\\x03\\x04'."
+        )  # fmt: skip
     try:
-        with np.load(path, allow_pickle=False) as f:
+        # The file is opened here, not by np.load, so that it is closed on every error.
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as f:
             files = set(f.files)
             # The packaged tables store the float32 coefficients as byte planes (`_data.py`).
             coeffs_name = "coeffs_planes" if "coeffs_planes" in files else "coeffs"
             missing = {"scale", coeffs_name} - files
             if missing:
                 _fail(path, f"missing array(s) {sorted(missing)}; found {sorted(files)}.")
+            _check_declared(path, f.zip, files, coeffs_name)
             scale = np.asarray(f["scale"])
             coeffs = np.asarray(f[coeffs_name])
             if coeffs_name == "coeffs_planes":
-                res = scale.shape[0] if scale.ndim == 1 else -1
-                if coeffs.dtype != np.uint8 or coeffs.shape != (4, 9 * res**3):
-                    _fail(
-                        path,
-                        f"`coeffs_planes` must be uint8 of shape (4, {9 * res**3}) for res "
-                        f"{res}, got {coeffs.dtype} {coeffs.shape}.",
-                    )
+                res = scale.shape[0]
                 coeffs = decode_planes(coeffs, (3, res, res, res, 3))
             meta_raw = None
             if "metadata" in files:
                 # A 0-d string, or shape (1,) as `radiometria._io.npz_bytes` stores a 0-d array.
-                m = np.asarray(f["metadata"])
-                meta_raw = str(m.reshape(-1)[0]) if m.size == 1 else str(m[()])
+                meta_raw = str(np.asarray(f["metadata"]).reshape(-1)[0])
     except LUTFileError:
         raise
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
-        _fail(path, f"not a readable .npz file ({type(err).__name__}: {err}).")
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError, zlib.error) as err:
+        _fail(
+            path, f"not a readable .npz file, truncated or corrupt ({type(err).__name__}: {err})."
+        )
     _validate_arrays(path, scale, coeffs)
     meta = {}
     colourspace = "sRGB"
     if meta_raw is not None:
         try:
             meta = json.loads(meta_raw)
-        except json.JSONDecodeError as err:
+        except (json.JSONDecodeError, RecursionError) as err:
             _fail(path, f"`metadata` is not valid JSON ({err}).")
+        meta = _check_metadata(path, meta, scale.shape[0])
         expected = meta.get("sha256")
         if expected is not None:
             actual = checksum(scale, coeffs)
@@ -286,11 +388,6 @@ def _load_npz(path: Path):
                     path,
                     f"checksum mismatch: stored sha256 {expected[:16]}..., data {actual[:16]}...",
                 )
-        if meta.get("resolution", scale.shape[0]) != scale.shape[0]:
-            _fail(
-                path,
-                f"metadata resolution {meta['resolution']} != array resolution {scale.shape[0]}.",
-            )
         colourspace = meta.get("colourspace", colourspace)
     lut = RGBToSpectrumLUT(scale, coeffs, colourspace)
     return lut, {"format": "npz", "colourspace": colourspace, "metadata": meta}
@@ -301,8 +398,8 @@ def _load_coeff(path: Path):
     if len(data) < 8 or data[:4] != COEFF_MAGIC:
         _fail(path, f"not an rgb2spec file (header {data[:4]!r}, expected {COEFF_MAGIC!r}).")
     (res,) = struct.unpack_from("<I", data, 4)
-    if res < 2 or res > 4096:
-        _fail(path, f"implausible resolution {res}.")
+    if not 2 <= res <= MAX_RESOLUTION:
+        _fail(path, f"header resolution {res} is outside [2, {MAX_RESOLUTION}].")
     n_table = 8 + 4 * res + 4 * 9 * res**3
     if len(data) < n_table:
         _fail(path, f"truncated: {len(data)} bytes, the table of res {res} needs {n_table}.")
