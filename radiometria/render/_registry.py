@@ -14,7 +14,7 @@ from ..camera import (
     TentFilter,
 )
 from ._accelerators import ACCELERATORS
-from ._integrators import Direct, Path
+from ._integrators import Direct, Path, VolPath
 from ._lights import AreaLight
 from ._materials import (
     Conductor,
@@ -24,6 +24,8 @@ from ._materials import (
     RoughConductor,
     RoughDielectric,
 )
+from ._materials._null import Null
+from ._media import HomogeneousMediumPlugin
 from ._samplers import Independent, OwenSobol
 from ._textures import ConstantTexture
 
@@ -34,6 +36,7 @@ __all__ = [
     "INTEGRATORS",
     "LIGHTS",
     "MATERIALS",
+    "MEDIA",
     "SAMPLERS",
     "TEXTURES",
 ]
@@ -44,11 +47,15 @@ def _by_name(*plugins) -> dict:
 
 
 # Mitsuba 3's `<bsdf type=...>` names.
-MATERIALS = _by_name(Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric)
+MATERIALS = _by_name(
+    Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null
+)
 # Mitsuba 3's `<emitter type=...>` names.
 LIGHTS = _by_name(AreaLight)
 # Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
-INTEGRATORS = _by_name(Path, Direct)
+INTEGRATORS = _by_name(Path, Direct, VolPath)
+# Mitsuba 3's `<medium type=...>` names.
+MEDIA = _by_name(HomogeneousMediumPlugin)
 # `radiometria render --sampler`.
 SAMPLERS = _by_name(Independent, OwenSobol)
 # Spectral values of scene files are constant textures until textures arrive (scene format).

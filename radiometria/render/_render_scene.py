@@ -14,8 +14,9 @@ from jaxtyping import Array, Float, Int
 
 from ._accelerators import AbstractAccelerator, build_accelerator, check_triangle_arrays
 from ._geometry._mesh import _areas, _corners
-from ._lights import AbstractLight, AreaLight
+from ._lights import AbstractLight, AreaLight, LightSet
 from ._materials import AbstractMaterial, Diffuse, MaterialSet
+from ._media import AbstractMediumPlugin, MediumSet
 from ._spectral import SpectrumTable
 from ._textures import AbstractTexture, ConstantTexture
 
@@ -35,9 +36,17 @@ class RenderScene(eqx.Module):
         geometric normal (the direction of `e1 x e2`) of each triangle. [scene units]
     - `face_material`: `(f,)` int32 material of each triangle.
     - `materials`: the `MaterialSet` (one plugin per kind of material).
-    - `light`: the emitters, an `AbstractLight` (an `AreaLight` on emissive triangles).
+    - `light`: the emitters, an `AbstractLight`: an `AreaLight` on emissive triangles, or a
+        `LightSet` of it and further plugins (point, spot, directional, environment).
     - `accelerator`: an `AbstractAccelerator` (brute force or a BVH).
     - `ray_epsilon`: relative offset of secondary ray origins (static). [1]
+    - `media`: the scene's participating media (`MediumSet`), or `None` for none.
+    - `face_interior`, `face_exterior`: `(f,)` int32 medium index on the back side (against
+        the normal) and the front side of each triangle: -1 is a vacuum, -2 (`KEEP_MEDIUM`)
+        marks a triangle that is no medium boundary (a ray crossing it keeps its medium), as
+        in Mitsuba, where only shapes with an `interior` or `exterior` change the medium.
+        `None` when the scene has no media.
+    - `camera_medium`: index of the medium the camera sits in, -1 for a vacuum (static).
 
     !!! note "Thesis"
         Chapter 8 (the scene of the light transport equation).
@@ -55,6 +64,10 @@ class RenderScene(eqx.Module):
     light: AbstractLight  # the emitters
     accelerator: AbstractAccelerator  # what the intersection queries traverse
     ray_epsilon: float = eqx.field(static=True, default=1e-4)
+    media: MediumSet | None = None  # participating media, one row per medium
+    face_interior: Int[Array, " f"] | None = None  # medium behind each face (-1 vacuum, -2 keep)
+    face_exterior: Int[Array, " f"] | None = None  # medium in front of each face
+    camera_medium: int = eqx.field(static=True, default=-1)
 
     @classmethod
     def from_triangles(
@@ -68,8 +81,13 @@ class RenderScene(eqx.Module):
         *,
         two_sided=None,
         emitter_two_sided=None,
+        lights: "list[AbstractLight] | tuple" = (),
         accelerator: "str | AbstractAccelerator" = "auto",
         dtype=jnp.float32,
+        media: "MediumSet | list[AbstractMediumPlugin] | None" = None,
+        face_interior=None,
+        face_exterior=None,
+        camera_medium: int = -1,
     ) -> "RenderScene":
         """Lay out a triangle scene (NumPy work, done once, outside `jit`).
 
@@ -88,10 +106,18 @@ class RenderScene(eqx.Module):
             (default: none; only with a `SpectrumTable` of reflectances).
         - `emitter_two_sided`: `(e,)` booleans, emitters that emit on both sides (default:
             none).
+        - `lights`: further light plugins beside the area lights (`PointLight`,
+            `SpotLight`, `DirectionalLight`, `ConstantLight`, `EnvironmentLight`); with any,
+            the scene's `light` is a `LightSet` that picks one per sample by power.
         - `accelerator`: an `AbstractAccelerator` built on these triangles, or a name:
             `"bvh"`, `"brute_force"` (test every triangle: fastest for a few dozen triangles,
             such as the Cornell box) or `"auto"` (brute force up to 64 triangles).
         - `dtype`: float dtype of the arrays (float32 for rendering).
+        - `media`: medium plugins in medium order (a list of `AbstractMediumPlugin`, or a
+            `MediumSet`), or `None` for a scene without media.
+        - `face_interior`, `face_exterior`: `(f,)` medium index behind / in front of each
+            triangle, -1 for a vacuum, -2 for no boundary (default: all -2).
+        - `camera_medium`: the medium the camera is in, -1 for a vacuum.
         """
         vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
@@ -123,8 +149,14 @@ class RenderScene(eqx.Module):
         light = AreaLight.from_triangles(
             p0, e1, e2, normal, area, face_emitter, radiance, emitter_two_sided, dtype=dtype
         )
+        if lights:
+            # The bounding sphere of the geometry sets the power of lights at infinity.
+            lo, hi = (vertices.min(axis=0), vertices.max(axis=0)) if len(vertices) else (0, 0)
+            radius = max(float(np.linalg.norm(np.asarray(hi) - lo)) / 2.0, 1e-4)
+            light = LightSet.from_lights([light, *lights], scene_radius=radius, dtype=dtype)
         if not isinstance(accelerator, AbstractAccelerator):
             accelerator = build_accelerator(vertices, faces, kind=accelerator, dtype=dtype)
+        media_fields = _media_fields(media, face_interior, face_exterior, camera_medium, n_faces)
         return cls(
             p0=p0,
             e1=e1,
@@ -134,4 +166,44 @@ class RenderScene(eqx.Module):
             materials=materials,
             light=light,
             accelerator=accelerator,
+            **media_fields,
         )
+
+
+def _media_fields(media, face_interior, face_exterior, camera_medium, n_faces) -> dict:
+    """The media fields of `RenderScene.from_triangles`, checked (NumPy, outside `jit`)."""
+    if media is None:
+        if face_interior is not None or face_exterior is not None or camera_medium != -1:
+            raise ValueError("medium indices were given for a scene without `media`.")
+        return {}
+    if not isinstance(media, MediumSet):
+        media = MediumSet.from_media(list(media))
+    n_media = media.n_media
+    out = {"media": media}
+    for name, value in (("face_interior", face_interior), ("face_exterior", face_exterior)):
+        a = np.full(n_faces, -2, np.int64) if value is None else np.asarray(value, np.int64)
+        a = a.reshape(n_faces) if a.size == n_faces else a
+        if a.shape != (n_faces,) or a.min(initial=-1) < -2 or a.max(initial=-1) >= n_media:
+            raise ValueError(
+                f"`{name}` must be ({n_faces},) indices of the {n_media} media, -1 (vacuum) "
+                f"or -2 (no boundary); got shape {a.shape}, range "
+                f"[{a.min(initial=0)}, {a.max(initial=0)}]."
+            )
+        out[name] = jnp.asarray(a, jnp.int32)
+    inside = (out["face_interior"] == -2) != (out["face_exterior"] == -2)
+    if bool(jnp.any(inside)):
+        raise ValueError(
+            "`face_interior` and `face_exterior` must both be -2 (no boundary) or both name a "
+            "medium or -1 (vacuum) on each triangle."
+        )
+    if (
+        isinstance(camera_medium, bool)
+        or not isinstance(camera_medium, int)
+        or not (-1 <= camera_medium < n_media)
+    ):
+        raise ValueError(
+            f"`camera_medium` must be -1 (vacuum) or index the {n_media} media, got "
+            f"{camera_medium!r}."
+        )
+    out["camera_medium"] = camera_medium
+    return out

@@ -11,3 +11,8 @@ from ._path import (
     path_radiance as path_radiance,
     sample_dimensions as sample_dimensions,
 )
+from ._volpath import (
+    VolPath as VolPath,
+    volpath_radiance as volpath_radiance,
+    volpath_sample_dimensions as volpath_sample_dimensions,
+)
