@@ -6,6 +6,7 @@ path that cannot be written raises the usual `OSError` subclass with the path in
 IO is NumPy-side: arrays in, NumPy arrays out.
 """
 
+import os
 import struct
 import zlib
 from collections.abc import Callable, Mapping
@@ -133,18 +134,119 @@ def write_exr(path, rgb, metadata: Mapping | None = None) -> Path:
     return _write_exr_channels(path, channels, extra)
 
 
+EXR_MAGIC = b"\x76\x2f\x31\x01"
+EXR_MAX_HEADER_BYTES = 1 << 20
+# Scanlines per chunk of each OpenEXR compression (index = the `compression` byte); an
+# unknown compression gets the largest, so that the offset-table bound below never refuses
+# a valid file.
+_EXR_LINES_PER_CHUNK = (1, 1, 1, 16, 32, 16, 32, 32, 32, 256)
+
+
+class _ExrHeaderError(ValueError):
+    pass
+
+
+def _exr_header(path: Path, size: int) -> dict:
+    """The attributes of the first header of an OpenEXR file, as raw bytes by name.
+
+    Parsed here (OpenEXR 2 file layout, `Kainz2004`) so that a dataWindow the file cannot hold
+    is refused before the binding allocates pixels.
+    """
+    with open(path, "rb") as fh:
+        head = fh.read(min(size, EXR_MAX_HEADER_BYTES))
+    if head[:4] != EXR_MAGIC:
+        raise _ExrHeaderError(f"not an OpenEXR file (it starts with {head[:4]!r}).")
+    if len(head) < 8:
+        raise _ExrHeaderError("truncated in its version field.")
+    (flags,) = struct.unpack_from("<I", head, 4)
+    pos, attrs = 8, {"_flags": flags}
+    while True:
+        end = head.find(b"\0", pos)
+        if end < 0:
+            raise _ExrHeaderError(f"truncated header (no end of the attribute at byte {pos}).")
+        name = head[pos:end]
+        pos = end + 1
+        if not name:
+            attrs["_end"] = pos
+            return attrs
+        end = head.find(b"\0", pos)
+        if end < 0 or end + 5 > len(head):
+            raise _ExrHeaderError(f"truncated header in attribute {name[:64]!r}.")
+        (n,) = struct.unpack_from("<i", head, end + 1)
+        pos = end + 5
+        if n < 0 or pos + n > len(head):
+            raise _ExrHeaderError(
+                f"attribute {name[:64]!r} claims {n} bytes; the header holds {len(head) - pos}."
+            )
+        attrs[name.decode("latin-1")] = head[pos : pos + n]
+        pos += n
+
+
+def _exr_channel_count(chlist: bytes) -> int:
+    """Entries of a `chlist` attribute: name, NUL, then 16 bytes each; a NUL ends the list."""
+    pos, n = 0, 0
+    while pos < len(chlist) and chlist[pos] != 0:
+        end = chlist.find(b"\0", pos)
+        if end < 0 or end + 17 > len(chlist):
+            raise _ExrHeaderError("the channel list is truncated.")
+        pos, n = end + 17, n + 1
+    if n == 0:
+        raise _ExrHeaderError("the channel list is empty.")
+    return n
+
+
+def _check_exr_size(attrs: dict, size: int) -> None:
+    """Refuse a dataWindow that is empty, inverted, or larger than memory or the file."""
+    if attrs["_flags"] & 0x1800:  # multi-part or deep: the binding's own checks apply
+        return
+    if len(attrs.get("dataWindow", b"")) != 16 or "channels" not in attrs:
+        raise _ExrHeaderError("the header lacks a dataWindow or a channel list.")
+    x0, y0, x1, y1 = struct.unpack("<4i", attrs["dataWindow"])
+    width, height = x1 - x0 + 1, y1 - y0 + 1
+    if width < 1 or height < 1:
+        raise _ExrHeaderError(f"empty or inverted dataWindow ({x0}, {y0}) - ({x1}, {y1}).")
+    n_channels = _exr_channel_count(attrs["channels"])
+    need = width * height * n_channels * 4
+    try:
+        memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        memory = 1 << 40
+    if need > memory:
+        raise _ExrHeaderError(
+            f"dataWindow {width} x {height} with {n_channels} channel(s) would need "
+            f"{need / 2**30:,.1f} GiB as float32, more than this machine's "
+            f"{memory / 2**30:,.1f} GiB of memory."
+        )
+    if not attrs["_flags"] & 0x200:  # scanline file: its offset table must fit in the file
+        comp = attrs.get("compression", b"\0")[:1] or b"\0"
+        lines = _EXR_LINES_PER_CHUNK[comp[0]] if comp[0] < len(_EXR_LINES_PER_CHUNK) else 256
+        chunks = -(-height // lines)
+        if attrs["_end"] + 8 * chunks > size:
+            raise _ExrHeaderError(
+                f"dataWindow height {height} needs {chunks:,} chunk offsets ({8 * chunks:,} "
+                f"bytes), but the file has {size - attrs['_end']:,} bytes after its header "
+                "(truncated file, or an absurd dataWindow)."
+            )
+
+
 def _read_exr_file(path):
     import OpenEXR
 
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(2, f"No such image file: {str(path)!r}", str(path))
+    size = path.stat().st_size
+    try:
+        _check_exr_size(_exr_header(path, size), size)
+    except _ExrHeaderError as e:
+        raise ValueError(f"{str(path)!r} is not a readable OpenEXR file: {e}") from None
     try:
         with OpenEXR.File(str(path), separate_channels=True) as f:
             header = dict(f.header())
             channels = {name: (ch.pixels, ch.type()) for name, ch in f.channels().items()}
-    except RuntimeError as e:
-        raise ValueError(f"{str(path)!r} is not a readable OpenEXR file: {e}") from e
+    except (RuntimeError, ValueError, TypeError, KeyError, IndexError, MemoryError) as e:
+        # The binding reports a corrupt or truncated file as RuntimeError or ValueError.
+        raise ValueError(f"{str(path)!r} is not a readable OpenEXR file: {e}") from None
     metadata = {k: v for k, v in header.items() if k not in _EXR_STANDARD}
     return path, channels, metadata
 
