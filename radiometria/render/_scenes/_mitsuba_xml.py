@@ -375,6 +375,8 @@ def _expected_type(ctx: _Ctx, node: _Node, name: str, value):
         ok = value.shape == _SHAPES[name]
     if not ok:
         raise ctx.err(node, f"parameter '{name}' must be {what}, got <{node.tag}>")
+    if kind is _SPECTRAL and isinstance(value, float):  # a grey spectrum given as a <float>
+        check_spectral_values(value, f"{node.file or ctx.file}:{node.line}: parameter '{name}'")
     return value
 
 
