@@ -15,7 +15,14 @@ from ..camera import (
 )
 from ._accelerators import ACCELERATORS
 from ._integrators import Direct, Path, VolPath
-from ._lights import AreaLight
+from ._lights import (
+    AreaLight,
+    ConstantLight,
+    DirectionalLight,
+    EnvironmentLight,
+    PointLight,
+    SpotLight,
+)
 from ._materials import (
     Conductor,
     Dielectric,
@@ -51,7 +58,9 @@ MATERIALS = _by_name(
     Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null
 )
 # Mitsuba 3's `<emitter type=...>` names.
-LIGHTS = _by_name(AreaLight)
+LIGHTS = _by_name(
+    AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvironmentLight
+)
 # Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
 INTEGRATORS = _by_name(Path, Direct, VolPath)
 # Mitsuba 3's `<medium type=...>` names.

@@ -186,7 +186,7 @@ def _write(tmp_path, body: str):
     [
         ('<scene>\n  <shape type="rectangle">\n    <texture type="bitmap"/>\n  </shape>\n</scene>',
          r"bad.xml:3: <texture>: textures are not supported"),
-        ('<scene>\n\n  <emitter type="constant"/>\n</scene>', r"bad.xml:3: .*unsupported tag <emitter type='constant'>"),  # noqa: E501
+        ('<scene>\n\n  <emitter type="projector"/>\n</scene>', r"bad.xml:3: .*unsupported emitter \(outside a <shape>\) type 'projector'"),  # noqa: E501
         ('<scene>\n  <volume/>\n</scene>', r"bad.xml:2: .*unsupported tag <volume>"),
         ('<scene>\n  <bsdf type="plastic"/>\n</scene>', r"bad.xml:2: .*unsupported BSDF type 'plastic'"),  # noqa: E501
         ('<scene>\n  <shape type="cube">\n   <float name="radius" value="1"/>\n  </shape>\n</scene>',  # noqa: E501

@@ -301,6 +301,12 @@ def _segment(
     v = _vertex(scene, state.o, state.d)
     le = scene.light.emitted(v.face, v.cos_o, v.valid, wavelength_nm)
     pdf_light = scene.light.pdf_li(v.face, v.t, v.cos_o)
+    # A ray that leaves the scene sees the lights at infinity (constant, envmap), weighted
+    # against next-event estimation of the same direction like a hit on an emitter.
+    escaped = state.alive & ~v.valid
+    le_inf = scene.light.emitted_escaped(state.d, escaped, wavelength_nm)
+    le = jnp.where(v.valid[:, None], le, le_inf)
+    pdf_light = jnp.where(v.valid, pdf_light, scene.light.pdf_escaped(state.d))
     w = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
     radiance = state.radiance + state.beta * le * w[:, None]
     state = eqx.tree_at(lambda s: (s.radiance, s.alive), state, (radiance, state.alive & v.valid))
@@ -339,11 +345,14 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
 
     # Next-event estimation: a point on a light (e.g. an emissive triangle chosen by power x
-    # area, then a uniform point on it), weighted against BSDF sampling by MIS.
+    # area, then a uniform point on it) or a direction to a light at infinity (unbounded
+    # shadow ray), weighted against BSDF sampling by MIS (delta lights: weight 1).
     ls = scene.light.sample_li(v.p, u_b[:, 4], u_b[:, 0:2], wavelength_nm)
     wi_l = to_local(ls.wi)
     f_light = bsdf.f(wo_l, wi_l) * jnp.abs(wi_l[:, 2:3])
     w_light = power_heuristic(1, ls.pdf, 1, bsdf.pdf(wo_l, wi_l))
+    if ls.delta is not None:  # a delta light (point, spot, directional): no BSDF sample finds it
+        w_light = jnp.where(ls.delta, 1.0, w_light)
     use = alive & (ls.pdf > 0)
     shadow_tmax = jnp.where(use, ls.dist * (1.0 - 1e-4) - offset, 0.0)
     origin = _offset(v.p, v.n, ls.wi, offset)

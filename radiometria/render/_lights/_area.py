@@ -2,6 +2,7 @@
 
 from typing import ClassVar
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
@@ -34,6 +35,9 @@ class AreaLight(AbstractLight):
         selection probabilities (last = 1).
     - `p0`, `e1`, `e2`, `normal`: `(l, 3)` first corner, edges and unit normal of each
         emissive triangle. [scene units]
+    - `phi`: emitted power, $\pi \sum_i A_i \bar L_i$ (twice that for two-sided emitters),
+        with $\bar L_i$ the radiance averaged over the 1 nm grid (static, for `LightSet`).
+        [W nm^-1]
 
     !!! note "Thesis"
         Chapter 8 (emitters); eq. 1.13-1.14 (radiance and solid angle).
@@ -55,6 +59,7 @@ class AreaLight(AbstractLight):
     e1: Float[Array, "l 3"]
     e2: Float[Array, "l 3"]
     normal: Float[Array, "l 3"]
+    phi: float = eqx.field(static=True, default=0.0)
 
     @classmethod
     def from_triangles(
@@ -98,11 +103,14 @@ class AreaLight(AbstractLight):
         # Next-event estimation picks an emissive triangle with probability proportional to
         # area x (mean emitted radiance over the grid), then a point uniformly on it.
         emissive = np.flatnonzero((face_emitter >= 0) & (area > 0))
+        phi = 0.0
         if emissive.size:
             mean_le = np.asarray(radiance.table.values, np.float64).mean(axis=1)
             power = area[emissive] * mean_le[face_emitter[emissive]]
             keep = power > 0
             emissive, power = emissive[keep], power[keep]
+            sides = np.where(two_sided[face_emitter[emissive]], 2.0, 1.0)
+            phi = float(np.pi * np.sum(power * sides))
         pdf_area = np.zeros(n_faces)
         if emissive.size == 0:
             # No light to sample: a dummy entry whose density is 0, so NEE contributes nothing.
@@ -125,6 +133,7 @@ class AreaLight(AbstractLight):
             e1=e1[lf],
             e2=e2[lf],
             normal=normal[lf],
+            phi=phi,
         )
 
     @staticmethod
@@ -149,6 +158,15 @@ class AreaLight(AbstractLight):
         on = valid & (emitter >= 0) & ((cos_o > 0) | (two_sided & (cos_o != 0)))
         le = self.radiance(jnp.maximum(emitter, 0), wavelength_nm)
         return jnp.where(on[:, None], le, 0.0)
+
+    def emitted_escaped(self, directions, escaped, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, directions.dtype)
+
+    def pdf_escaped(self, directions):
+        return jnp.zeros(directions.shape[:-1], directions.dtype)
+
+    def power(self, scene_radius: float) -> float:
+        return self.phi
 
     def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
         dtype = p.dtype

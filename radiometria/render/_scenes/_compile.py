@@ -6,11 +6,11 @@ from ...camera import AbstractFilter, PinholeCamera
 from .._integrators import AbstractIntegrator
 from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
 from .._lights import AreaLight
-from .._registry import FILTERS, INTEGRATORS, MATERIALS
+from .._registry import FILTERS, INTEGRATORS, LIGHTS, MATERIALS
 from .._render_scene import RenderScene
 from ._description import SceneDescription, SceneError
 
-__all__ = ["compile_scene", "scene_filter", "scene_integrator"]
+__all__ = ["compile_scene", "scene_filter", "scene_integrator", "scene_lights"]
 
 # Each filter's parameters in Mitsuba's names, with Mitsuba's defaults (the Gaussian's radius
 # defaults to 4 standard deviations in the filter itself); `catmullrom` is Mitchell B=0, C=1/2.
@@ -82,6 +82,47 @@ def scene_integrator(
     return cls.from_properties(params, where=description.source or "scene")
 
 
+def scene_lights(description: SceneDescription) -> list:
+    """The light plugins of the scene's lights that are not on a shape (`LIGHTS` registry),
+    one plugin per kind holding every light of that kind, in the order kinds first appear.
+
+    **Arguments:**
+
+    - `description`: a `SceneDescription` (its `lights`).
+
+    **Returns:**
+
+    A list of `AbstractLight` plugins (empty without such lights). Bad parameters raise
+    `SceneError` naming the file, line and parameter; a second environment emitter too.
+
+    !!! note "Thesis"
+        Chapter 8 (light sources).
+    """
+    kinds: dict[str, list] = {}
+    for light in description.lights:
+        if light.type not in LIGHTS or light.type == "area":
+            raise SceneError(
+                f"{light.where or description.source or 'scene'}: unsupported emitter type "
+                f"{light.type!r} outside a shape; supported: "
+                f"{sorted(k for k in LIGHTS if k != 'area')}."
+            )
+        kinds.setdefault(light.type, []).append(light)
+    infinite = [lt for lt in description.lights if lt.type in ("constant", "envmap")]
+    if len(infinite) > 1:
+        raise SceneError(
+            f"{infinite[1].where}: a scene takes one environment emitter (constant or envmap); "
+            f"the first is at {infinite[0].where}."
+        )
+    plugins = []
+    for kind, group in kinds.items():
+        where = [lt.where or lt.name for lt in group]
+        try:
+            plugins.append(LIGHTS[kind].from_properties([lt.params for lt in group], where=where))
+        except ValueError as e:
+            raise SceneError(str(e)) from None
+    return plugins
+
+
 def compile_scene(
     description: SceneDescription, *, width=None, height=None, accelerator="auto"
 ) -> tuple[RenderScene, PinholeCamera, AbstractFilter]:
@@ -131,6 +172,7 @@ def compile_scene(
         description.face_emitter,
         radiance,
         emitter_two_sided=[e.two_sided for e in description.emitters],
+        lights=scene_lights(description),
         accelerator=accelerator,
     )
     cam = description.camera

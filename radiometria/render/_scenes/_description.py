@@ -29,6 +29,7 @@ __all__ = [
     "check_spectral_values",
     "read_scene_text",
     "AreaEmitter",
+    "LightDescription",
     "CameraDescription",
     "FilmDescription",
     "Material",
@@ -119,6 +120,30 @@ class AreaEmitter:
 
 
 @dataclasses.dataclass(frozen=True)
+class LightDescription:
+    """A light that is not on a shape: `point`, `spot`, `directional`, `constant`, `envmap`
+    (thesis ch. 8).
+
+    **Fields:**
+
+    - `type`: the plugin's name, a key of `radiometria.render._registry.LIGHTS`.
+    - `params`: parameter name -> value as the file gives it (spectral values as typed
+        objects, `to_world` as a `(4, 4)` array, points and vectors as `(3,)` arrays, an
+        environment map's image as `data`, `(H, W, 3)` linear RGB).
+    - `name`: the id in the file, or a generated name.
+    - `where`: the file and line (or field) that defines it, for error messages.
+
+    !!! note "Thesis"
+        Ch. 8 (light sources); Mitsuba 3's emitters (`Jakob2022`).
+    """
+
+    type: str
+    params: dict
+    name: str = ""
+    where: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
 class CameraDescription:
     """A pinhole (perspective) camera in Mitsuba's convention (thesis section 2.3.1).
 
@@ -194,6 +219,7 @@ class SceneDescription:
     - `face_shape`: `(f,)` int32 index into `shape_names`.
     - `materials`: tuple of `Material`.
     - `emitters`: tuple of `AreaEmitter`.
+    - `lights`: tuple of `LightDescription`, the lights that are not on a shape.
     - `camera`: `CameraDescription`.
     - `film`: `FilmDescription`.
     - `integrator`: the integrator plugin's name, a key of
@@ -228,6 +254,7 @@ class SceneDescription:
     shape_names: tuple = ()
     unit: str = "scene units"
     source: str = ""
+    lights: tuple = ()
 
     def __post_init__(self):
         f = np.asarray(self.faces)
@@ -294,6 +321,7 @@ def assemble(
     integrator: str = "path",
     unit: str = "scene units",
     source: str = "",
+    lights: tuple = (),
 ) -> SceneDescription:
     """Validate the shapes (degenerate rule), merge them and build the emitters."""
     all_v, all_f, mat, emi, owner, emitters = [], [], [], [], [], []
@@ -351,6 +379,7 @@ def assemble(
         shape_names=tuple(s.name for s in shapes),
         unit=unit,
         source=source,
+        lights=tuple(lights),
     )
 
 

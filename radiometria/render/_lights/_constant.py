@@ -1,0 +1,79 @@
+"""A constant environment (Mitsuba's `constant` emitter): the same radiance from everywhere."""
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ...montecarlo import sample_uniform_sphere
+from .._spectral import SpectrumTable
+from ._base import AbstractLight, LightSample
+from ._common import illuminant_table, spectral_param
+
+
+class ConstantLight(AbstractLight):
+    r"""A light at infinity of the same radiance $L$ in every direction.
+
+    Rays that leave the scene see $L$. Next-event estimation samples a direction uniformly on
+    the sphere (density $1/4\pi$, as Mitsuba's `constant` does), weighted against BSDF
+    sampling by MIS; its power for picking among lights is $4\pi^2 r^2 \bar L$ (pbrt's, for a
+    scene of radius $r$).
+
+    **Fields:**
+
+    - `radiance`: `SpectrumTable` with one row. [W m^-2 sr^-1 nm^-1]
+    - `mean_radiance`: its mean over the 1 nm grid (static). [W m^-2 sr^-1 nm^-1]
+
+    !!! note "Thesis"
+        Chapter 8 (light sources); eq. 1.13 (radiance).
+
+    ??? cite "References"
+        `Pharr2023` §12.5.1 (uniform infinite lights); `Jakob2022` (Mitsuba's `constant`).
+    """
+
+    NAME: ClassVar[str] = "constant"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset({"radiance"})
+    radiance: SpectrumTable
+    mean_radiance: float = eqx.field(static=True)
+
+    @classmethod
+    def from_properties(
+        cls, params: list[dict], *, where: list[str], dtype=jnp.float32
+    ) -> "ConstantLight":
+        """A constant environment from its `radiance` (RGB, spectrum or number; default 1)
+        [W m^-2 sr^-1 nm^-1]. A scene has at most one light at infinity (as in Mitsuba)."""
+        if len(params) != 1:
+            raise ValueError(f"{where[1]}: a scene takes one environment emitter, got a second.")
+        row = spectral_param(params[0], "radiance", where[0])
+        return cls(radiance=illuminant_table([row], dtype), mean_radiance=float(row.mean()))
+
+    def _le(self, n, wavelength_nm):
+        return self.radiance(jnp.zeros((n,), jnp.int32), wavelength_nm)
+
+    def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
+        n = p.shape[0]
+        wi = sample_uniform_sphere(u2, check=False).astype(p.dtype)
+        return LightSample(
+            wi=wi,
+            dist=jnp.full((n,), jnp.inf, p.dtype),
+            radiance=self._le(n, wavelength_nm),
+            pdf=jnp.full((n,), 1.0 / (4.0 * np.pi), p.dtype),
+            delta=jnp.zeros((n,), bool),
+        )
+
+    def pdf_li(self, face, dist, cos_light):
+        return jnp.zeros(face.shape, dist.dtype)
+
+    def emitted(self, face, cos_o, valid, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
+
+    def emitted_escaped(self, directions, escaped, wavelength_nm):
+        le = self._le(directions.shape[0], wavelength_nm)
+        return jnp.where(escaped[:, None], le, 0.0)
+
+    def pdf_escaped(self, directions):
+        return jnp.full(directions.shape[:-1], 1.0 / (4.0 * np.pi), directions.dtype)
+
+    def power(self, scene_radius: float) -> float:
+        return float(4.0 * np.pi**2 * scene_radius**2 * self.mean_radiance)

@@ -1,0 +1,100 @@
+"""Directional lights (Mitsuba's `directional` emitter): parallel light from infinity."""
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from .._spectral import SpectrumTable
+from ._base import AbstractLight, LightSample
+from ._common import (
+    illuminant_table,
+    pick_row,
+    row_cdf,
+    spectral_param,
+    to_world_param,
+    vector_param,
+)
+
+
+class DirectionalLight(AbstractLight):
+    r"""Directional lights: every `directional` emitter of a scene, one row each.
+
+    A directional light of irradiance $E$ (on a surface facing it) travelling along $d$ gives
+    a shading point the irradiance $E \cos\theta$ from $-d$, unless something lies in between
+    (its shadow ray is unbounded). Next-event estimation picks one by its power over a disk of
+    the scene's radius, $\pi r^2 \bar E$; rays never hit it.
+
+    **Fields:**
+
+    - `direction`: `(m, 3)` unit directions in which the light travels.
+    - `irradiance`: `SpectrumTable`, one row per light. [W m^-2 nm^-1]
+    - `cdf`: `(m,)` cumulative probabilities; `mean_irradiance`: summed mean irradiance
+        (static). [W m^-2 nm^-1]
+
+    !!! note "Thesis"
+        Chapter 8 (light sources); eq. 1.6-1.9 (irradiance).
+
+    ??? cite "References"
+        `Pharr2023` §12.4 (distant lights); `Jakob2022` (Mitsuba's `directional` emitter).
+    """
+
+    NAME: ClassVar[str] = "directional"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset({"irradiance", "direction", "to_world"})
+    direction: Float[Array, "m 3"]
+    irradiance: SpectrumTable
+    cdf: Float[Array, " m"]
+    mean_irradiance: float = eqx.field(static=True)
+
+    @classmethod
+    def from_properties(
+        cls, params: list[dict], *, where: list[str], dtype=jnp.float32
+    ) -> "DirectionalLight":
+        """Directional lights from scene parameters (Mitsuba's names): `irradiance` (default
+        1) [W m^-2 nm^-1], and `direction` or `to_world` (its +z axis), not both. Bad values
+        raise `ValueError` naming `where`."""
+        dirs, rows = [], []
+        for p, w in zip(params, where, strict=True):
+            if "direction" in p and "to_world" in p:
+                raise ValueError(f"{w}: give 'direction' or 'to_world', not both.")
+            d = vector_param(p, "direction", w) if "direction" in p else to_world_param(p, w)[:3, 2]
+            norm = np.linalg.norm(d)
+            if not norm > 0:
+                raise ValueError(f"{w}: the light's direction is zero.")
+            dirs.append(d / norm)
+            rows.append(spectral_param(p, "irradiance", w))
+        mean = np.array([r.mean() for r in rows])
+        return cls(
+            direction=jnp.asarray(np.stack(dirs), dtype),
+            irradiance=illuminant_table(rows, dtype),
+            cdf=jnp.asarray(row_cdf(mean), dtype),
+            mean_irradiance=float(mean.sum()),
+        )
+
+    def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
+        j, prob, _ = pick_row(self.cdf, u_select)
+        n = p.shape[0]
+        return LightSample(
+            wi=-self.direction[j],
+            dist=jnp.full((n,), jnp.inf, p.dtype),
+            radiance=self.irradiance(j, wavelength_nm),
+            pdf=prob,
+            delta=jnp.ones((n,), bool),
+        )
+
+    def pdf_li(self, face, dist, cos_light):
+        return jnp.zeros(face.shape, dist.dtype)
+
+    def emitted(self, face, cos_o, valid, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
+
+    def emitted_escaped(self, directions, escaped, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, directions.dtype)
+
+    def pdf_escaped(self, directions):
+        return jnp.zeros(directions.shape[:-1], directions.dtype)
+
+    def power(self, scene_radius: float) -> float:
+        return float(np.pi * scene_radius**2 * self.mean_irradiance)

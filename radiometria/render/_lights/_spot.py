@@ -1,0 +1,155 @@
+"""Spot lights (Mitsuba's `spot` emitter): point lights emitting into a cone."""
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, Float
+
+from ..._math import dot
+from .._spectral import SpectrumTable
+from ._base import AbstractLight, LightSample
+from ._common import illuminant_table, pick_row, row_cdf, spectral_param, to_world_param
+
+
+def spot_falloff(cos_theta, cutoff, beam_width):
+    r"""Mitsuba 3's spot falloff: 1 inside the beam width, falling linearly in the angle to 0
+    at the cutoff angle, 0 outside.
+
+    $$f(\theta) = \begin{cases} 1 & \theta \le \theta_b \\
+      (\theta_c - \theta)/(\theta_c - \theta_b) & \theta_b < \theta < \theta_c \\
+      0 & \theta \ge \theta_c \end{cases}$$
+
+    **Arguments:**
+
+    - `cos_theta`: cosine of the angle to the spot's axis. [1]
+    - `cutoff`, `beam_width`: $\theta_c$ and $\theta_b$. [rad]
+
+    **Returns:**
+
+    The falloff in [0, 1]. [1]
+
+    ??? cite "References"
+        `Jakob2022` (Mitsuba 3's `spot` emitter, `falloff_curve`).
+    """
+    xp = jnp if isinstance(cos_theta, jnp.ndarray) else np
+    c = xp.clip(cos_theta, -1.0, 1.0)
+    width = cutoff - beam_width
+    ramp = (cutoff - xp.arccos(c)) / xp.where(width > 0, width, 1.0)
+    inside = xp.where(c >= xp.cos(beam_width), 1.0, ramp)
+    return xp.where(c > xp.cos(cutoff), inside, 0.0)
+
+
+class SpotLight(AbstractLight):
+    r"""Spot lights: every `spot` emitter of a scene, one row each.
+
+    A spot at the origin of its `to_world` frame shines along the frame's +z axis with
+    intensity $I\,f(\theta)$, where $f$ is Mitsuba's falloff (`spot_falloff`: 1 up to
+    `beam_width`, linear in the angle down to 0 at `cutoff_angle`). Next-event estimation picks
+    a spot by its power $2\pi \bar I \int_0^{\theta_c} f(\theta)\sin\theta\,d\theta$.
+
+    **Fields:**
+
+    - `position`: `(m, 3)` apexes. [scene units]
+    - `world_to_local`: `(m, 3, 3)` inverse of the 3x3 part of each `to_world`.
+    - `intensity`: `SpectrumTable`, the on-axis intensity, one row per spot. [W sr^-1 nm^-1]
+    - `cos_cutoff`, `cutoff`, `beam_width`: `(m,)` cone angles (cosine; [rad]).
+    - `cdf`: `(m,)` cumulative probabilities of picking each spot; `phi`: power (static).
+
+    !!! note "Thesis"
+        Chapter 8 (light sources); eq. 1.10-1.12 (intensity and irradiance).
+
+    ??? cite "References"
+        `Pharr2023` §12.1.2 (spotlights); `Jakob2022` (Mitsuba's `spot` emitter).
+    """
+
+    NAME: ClassVar[str] = "spot"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
+        {"intensity", "cutoff_angle", "beam_width", "to_world"}
+    )
+    position: Float[Array, "m 3"]
+    world_to_local: Float[Array, "m 3 3"]
+    intensity: SpectrumTable
+    cutoff: Float[Array, " m"]
+    beam_width: Float[Array, " m"]
+    cdf: Float[Array, " m"]
+    phi: float = eqx.field(static=True)
+
+    @classmethod
+    def from_properties(
+        cls, params: list[dict], *, where: list[str], dtype=jnp.float32
+    ) -> "SpotLight":
+        """Spot lights from scene parameters (Mitsuba's names and defaults): `intensity`
+        (default 1) [W sr^-1 nm^-1], `cutoff_angle` (default 20) and `beam_width` (default
+        3/4 of the cutoff) [degrees], `to_world` (position and +z axis). A `texture` is not
+        supported. Bad values raise `ValueError` naming `where`."""
+        pos, inv, rows, cut, beam, powers = [], [], [], [], [], []
+        theta = np.linspace(0.0, np.pi, 20001)
+        for p, w in zip(params, where, strict=True):
+            m = to_world_param(p, w)
+            cutoff = p.get("cutoff_angle", 20.0)
+            width = p.get("beam_width", 0.75 * cutoff)
+            for name, v in (("cutoff_angle", cutoff), ("beam_width", width)):
+                if not isinstance(v, int | float) or not 0 < v <= 90:
+                    raise ValueError(f"{w}: parameter '{name}' must be in (0, 90] [deg], got {v}.")
+            if width > cutoff:
+                raise ValueError(
+                    f"{w}: parameter 'beam_width' ({width} deg) must not exceed "
+                    f"'cutoff_angle' ({cutoff} deg)."
+                )
+            c, b = np.radians(cutoff), np.radians(width)
+            pos.append(m[:3, 3])
+            inv.append(np.linalg.inv(m[:3, :3]))
+            row = spectral_param(p, "intensity", w)
+            rows.append(row)
+            cut.append(c)
+            beam.append(b)
+            f = spot_falloff(np.cos(theta), c, b) * np.sin(theta)
+            powers.append(2.0 * np.pi * row.mean() * np.trapezoid(f, theta))
+        return cls(
+            position=jnp.asarray(np.stack(pos), dtype),
+            world_to_local=jnp.asarray(np.stack(inv), dtype),
+            intensity=illuminant_table(rows, dtype),
+            cutoff=jnp.asarray(cut, dtype),
+            beam_width=jnp.asarray(beam, dtype),
+            cdf=jnp.asarray(row_cdf(np.array(powers)), dtype),
+            phi=float(np.sum(powers)),
+        )
+
+    def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
+        j, prob, _ = pick_row(self.cdf, u_select)
+        to_light = self.position[j] - p
+        dist2 = dot(to_light, to_light)
+        dist = jnp.sqrt(dist2)
+        ok = dist > 0
+        wi = to_light / jnp.where(ok, dist, 1.0)[:, None]
+        # The direction from the apex to p in the spot's frame (Mitsuba: to_world^-1 (-wi)).
+        local = jnp.einsum("nij,nj->ni", self.world_to_local[j], -wi)
+        cos_theta = local[:, 2] / jnp.sqrt(jnp.maximum(dot(local, local), 1e-30))
+        falloff = spot_falloff(cos_theta, self.cutoff[j], self.beam_width[j])
+        scale = falloff / jnp.where(ok, dist2, 1.0)
+        le = self.intensity(j, wavelength_nm) * scale[:, None]
+        ok = ok & (falloff > 0)
+        return LightSample(
+            wi=wi,
+            dist=dist,
+            radiance=le,
+            pdf=jnp.where(ok, prob, 0.0),
+            delta=jnp.ones(dist.shape, bool),
+        )
+
+    def pdf_li(self, face, dist, cos_light):
+        return jnp.zeros(face.shape, dist.dtype)
+
+    def emitted(self, face, cos_o, valid, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
+
+    def emitted_escaped(self, directions, escaped, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, directions.dtype)
+
+    def pdf_escaped(self, directions):
+        return jnp.zeros(directions.shape[:-1], directions.dtype)
+
+    def power(self, scene_radius: float) -> float:
+        return self.phi
