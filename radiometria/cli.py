@@ -8,6 +8,12 @@ Subcommands:
 - `render SCENE --spp N --out FILE [--width W --height H --seed S --max-depth D
   --integrator NAME --sampler NAME --checkpoint FILE --checkpoint-every S --resume
   --preview-every S]`.
+- `cache info`, `cache clear`: the persistent compilation cache.
+
+Every command except `cache` keeps XLA's compiled programs in the persistent compilation cache
+(`$XDG_CACHE_HOME/radiometria/jax`, else `~/.cache/radiometria/jax`), so a second render of a
+scene of the same shape does not compile again; `radiometria --no-cache ...` or
+`RADIOMETRIA_NO_CACHE=1` turns it off.
 
 Each long task shows a progress bar on stderr (tqdm).
 """
@@ -72,6 +78,18 @@ def _render(args: argparse.Namespace) -> int:
     return render_command(args)
 
 
+def _cache_info(args: argparse.Namespace) -> int:
+    from .render._cli import cache_info_command
+
+    return cache_info_command(args)
+
+
+def _cache_clear(args: argparse.Namespace) -> int:
+    from .render._cli import cache_clear_command
+
+    return cache_clear_command(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the `radiometria` command."""
     parser = argparse.ArgumentParser(
@@ -84,6 +102,11 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="N",
         help="XLA CPU devices to shard renders over [one per core; XLA_FLAGS wins if it sets it]",
+    )
+    parser.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="do not use the persistent compilation cache (also: RADIOMETRIA_NO_CACHE=1)",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -149,6 +172,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--preview-every", type=float, default=None, help="rewrite OUT every S seconds [off]"
     )
     p.set_defaults(func=_render)
+
+    cache = sub.add_parser("cache", help="the persistent compilation cache (info, clear)")
+    csub = cache.add_subparsers(dest="cache_command", required=True, metavar="ACTION")
+    for name, func, text in (
+        ("info", _cache_info, "where the cache is, how many programs, how large"),
+        ("clear", _cache_clear, "delete the compiled programs"),
+    ):
+        p = csub.add_parser(name, help=text)
+        p.add_argument(
+            "--dir", type=Path, default=None, help="cache directory [~/.cache/radiometria/jax]"
+        )
+        p.set_defaults(func=func, uses_jax=False)
     return parser
 
 
@@ -174,6 +209,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--cpu-devices must be a positive integer, got {args.cpu_devices}")
     _configure_cpu_devices(args.cpu_devices)
     try:
+        if getattr(args, "uses_jax", True) and not args.no_cache:
+            from .render import enable_compilation_cache
+
+            enable_compilation_cache()
         return int(args.func(args) or 0)
     except (ValueError, TypeError, OSError) as err:
         print(f"radiometria: error: {err}", file=sys.stderr)

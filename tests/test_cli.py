@@ -12,8 +12,18 @@ import pytest
 
 from radiometria.camera import read_exr
 from radiometria.cli import main
+from radiometria.render import _cache
 
 RENDER = ["render", "cornell-box", "--width", "16", "--height", "16", "--spp", "2"]
+
+
+@pytest.fixture(autouse=True)
+def _compilation_cache_in_tmp(monkeypatch, tmp_path_factory):
+    """Commands run as subprocesses share one compilation cache in a temporary directory (never
+    the user's); commands run in this process leave its JAX configuration as it is."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "xdg-cache"))
+    monkeypatch.delenv("RADIOMETRIA_NO_CACHE", raising=False)
+    monkeypatch.setattr(_cache, "enable_compilation_cache", lambda *args, **kwargs: None)
 
 
 def _command() -> list[str]:

@@ -15,7 +15,8 @@ file, in a folder that shows the architecture (the model of diffrax's `_solver/`
   `radiometria.media.AbstractMedium` / `AbstractPhaseFunction`;
 - `_scenes/`: scene descriptions, the JSON and Mitsuba 3 XML formats, `compile_scene`;
 - `_registry.py`: the names scene files and the command line use, one registry per concept;
-- `_driver.py`: `render`, the batched, device-sharded render loop.
+- `_driver.py`: `render`, the batched, device-sharded render loop;
+- `_cache.py`: `enable_compilation_cache`, JAX's persistent compilation cache on disk.
 """
 
 from ._accelerators import (
@@ -23,6 +24,13 @@ from ._accelerators import (
     BruteForceAccelerator as BruteForceAccelerator,
     BVHAccelerator as BVHAccelerator,
     build_accelerator as build_accelerator,
+)
+from ._cache import (
+    CompilationCacheInfo as CompilationCacheInfo,
+    clear_compilation_cache as clear_compilation_cache,
+    compilation_cache_dir as compilation_cache_dir,
+    compilation_cache_info as compilation_cache_info,
+    enable_compilation_cache as enable_compilation_cache,
 )
 from ._checkpoint import CheckpointError as CheckpointError
 from ._driver import RenderInterrupted as RenderInterrupted, render as render

@@ -13,12 +13,24 @@ import tempfile
 from pathlib import Path
 
 from ..camera import write_exr, write_png
+from ._cache import (
+    clear_compilation_cache,
+    compilation_cache_dir,
+    compilation_cache_disabled,
+    compilation_cache_info,
+)
 from ._driver import RenderInterrupted, render
 from ._integrators import AbstractIntegrator
 from ._registry import SAMPLERS
 from ._scenes import load_scene, scene_integrator
 
-__all__ = ["MAX_IMAGE_SIDE", "demo_render", "render_command"]
+__all__ = [
+    "MAX_IMAGE_SIDE",
+    "cache_clear_command",
+    "cache_info_command",
+    "demo_render",
+    "render_command",
+]
 
 MAX_IMAGE_SIDE = 16384  # px: the command line refuses larger images (the library checks memory)
 _FORMATS = (".exr", ".png")
@@ -227,3 +239,21 @@ def demo_render(out_dir: Path, *, spp: int, smoke: bool) -> list[Path]:
         max_depth=None,
     )
     return [_write(exr, rgb, metadata), _write(png, rgb, metadata)]
+
+
+def cache_info_command(args: argparse.Namespace) -> int:
+    """Run `radiometria cache info [--dir DIR]`: the cache's directory, state, programs, size."""
+    info = compilation_cache_info(args.dir)
+    state = "off (RADIOMETRIA_NO_CACHE)" if compilation_cache_disabled() else "on"
+    print(f"compilation cache: {info.path}")
+    print(f"state: {state}")
+    print(f"programs: {info.entries}")
+    print(f"size: {info.size_bytes / 2**20:.1f} MiB")
+    return 0
+
+
+def cache_clear_command(args: argparse.Namespace) -> int:
+    """Run `radiometria cache clear [--dir DIR]`: delete the compiled programs."""
+    removed = clear_compilation_cache(args.dir)
+    print(f"removed {removed} compiled programs from {args.dir or compilation_cache_dir()}")
+    return 0

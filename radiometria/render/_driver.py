@@ -68,6 +68,7 @@ from ..camera import (
     film_develop,
     film_samples_to_XYZ,
 )
+from ._cache import checks_without_callbacks
 from ._checkpoint import CheckpointError, load_checkpoint, render_identity, save_checkpoint
 from ._integrators import AbstractIntegrator, Path
 from ._registry import INTEGRATORS, SAMPLERS
@@ -330,9 +331,10 @@ def render(
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"`seed` must be an int, got {type(seed).__name__} {seed!r}.")
-    scene, camera, rfilter, scene_integrator_ = _resolve_scene(
-        scene, camera, rfilter, width, height
-    )
+    with checks_without_callbacks():  # the loader has checked the values (see _cache.py)
+        scene, camera, rfilter, scene_integrator_ = _resolve_scene(
+            scene, camera, rfilter, width, height
+        )
     integrator = scene_integrator_ if integrator is None else integrator
     sampler = Independent() if sampler is None else sampler
     width, height = int(camera.width), int(camera.height)
@@ -400,7 +402,11 @@ def render(
         for i in steps:
             group, tile = divmod(i, plan.n_tiles)
             pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
-            film = _step(film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg)
+            # No host callbacks in the step: it stays cacheable on disk (`_cache.py`).
+            with checks_without_callbacks():
+                film = _step(
+                    film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg
+                )
             if serialise or checkpoint is not None or preview is not None:
                 film = jax.block_until_ready(film)
             done = i + 1
