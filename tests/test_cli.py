@@ -55,20 +55,22 @@ def test_render_writes_exr_and_png(tmp_path, capsys):
     rgb, meta = read_exr(exr)
     assert rgb.shape == (16, 16, 3) and rgb.dtype == np.float32
     assert np.all(np.isfinite(rgb)) and rgb.mean() > 0.01
+    assert meta["sampler"] == "sobol"  # the default: the lowest error per unit time
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "render" in capsys.readouterr().err  # the progress bar
 
 
 @pytest.mark.slow
 def test_render_sampler_and_integrator_flags(tmp_path):
-    """`--sampler sobol --integrator direct` renders with those plugins (recorded in the EXR)."""
+    """`--sampler independent --integrator direct` renders with those plugins (recorded in the
+    EXR)."""
     exr = tmp_path / "direct.exr"
     argv = ["render", "cornell-box", "--width", "8", "--height", "8", "--spp", "1"]
-    argv += ["--sampler", "sobol", "--integrator", "direct", "--out", str(exr)]
+    argv += ["--sampler", "independent", "--integrator", "direct", "--out", str(exr)]
     assert main(argv) == 0
     rgb, meta = read_exr(exr)
     assert rgb.shape == (8, 8, 3) and np.all(np.isfinite(rgb)) and rgb.mean() > 0
-    assert meta["sampler"] == "sobol" and meta["integrator"] == "direct"
+    assert meta["sampler"] == "independent" and meta["integrator"] == "direct"
 
 
 @pytest.mark.parametrize(

@@ -106,7 +106,7 @@ def _render_to(
     seed,
     max_depth,
     integrator=None,
-    sampler="independent",
+    sampler="sobol",
     progress=True,
     defines=None,
     **long_render,
