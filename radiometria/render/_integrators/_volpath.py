@@ -54,7 +54,6 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jaxtyping import Array, Bool, Float
 
 from ..._bits import pcg4d, uint32_to_unit_float
@@ -62,7 +61,7 @@ from ..._math import dot
 from ...media import HomogeneousMedium
 from ...montecarlo import power_heuristic
 from ...scattering import coordinate_system
-from .._materials._null import is_null
+from .._materials._null import has_null, is_null
 from .._media import KEEP_MEDIUM, MediumSet
 from .._render_scene import RenderScene
 from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
@@ -509,7 +508,7 @@ def volpath_radiance(
             cols = jax.lax.dynamic_slice_in_dim(u, first, n_dims, 1)
             return jnp.take(cols, paths, axis=0, mode="clip")
 
-    if not bool(np.any(np.asarray(is_null(scene.materials)))):
+    if not has_null(scene.materials):
         max_null = 1  # nothing to cross: one intersection per segment and per shadow ray
 
     def sample(b, paths):

@@ -8,7 +8,7 @@ from jaxtyping import Array, Bool, Float, Int
 from ...scattering import AbstractBxDF, BSDFSample
 from ._base import AbstractMaterial, Properties, unknown_parameters
 
-__all__ = ["Null", "NullBxDF", "is_null"]
+__all__ = ["Null", "NullBxDF", "has_null", "is_null"]
 
 
 class NullBxDF(AbstractBxDF):
@@ -80,3 +80,8 @@ def is_null(materials) -> Array:
     a constant under `jit`)."""
     kinds = jnp.asarray([isinstance(p, Null) for p in materials.plugins], bool)
     return kinds[materials.plugin_of]
+
+
+def has_null(materials) -> bool:
+    """Whether a `MaterialSet` holds any `null` material (static: from the plugins' kinds)."""
+    return any(isinstance(p, Null) for p in materials.plugins)

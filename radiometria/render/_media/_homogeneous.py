@@ -3,10 +3,12 @@
 from typing import ClassVar
 
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ...media import HenyeyGreenstein, HomogeneousMedium
-from .._spectral import SpectrumTable
+from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
+from .._spectral import SpectrumTable, tabulate_spectrum
 from ._base import AbstractMediumPlugin
 
 __all__ = ["HomogeneousMediumPlugin"]
@@ -31,6 +33,7 @@ class HomogeneousMediumPlugin(AbstractMediumPlugin):
     """
 
     NAME: ClassVar[str] = "homogeneous"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset({"sigma_t", "albedo", "scale", "g"})
     sigma_t: SpectrumTable
     albedo: SpectrumTable
     g: Float[Array, " m"]
@@ -42,6 +45,32 @@ class HomogeneousMediumPlugin(AbstractMediumPlugin):
                 f"`sigma_t`, `albedo` and `g` must have one row per medium ({m}); got "
                 f"{self.albedo.values.shape[0]} albedo rows and g of shape {jnp.shape(self.g)}."
             )
+
+    @classmethod
+    def from_properties(cls, params: dict, *, where: str = "scene") -> "HomogeneousMediumPlugin":
+        """One medium from a scene file's parameters (Mitsuba's defaults: `sigma_t` 1,
+        `albedo` 0.75, `scale` 1, isotropic): an RGB `sigma_t` is an unbounded spectrum, an
+        RGB `albedo` an albedo spectrum (thesis 2.2.3). Errors name `where`."""
+        unknown = sorted(set(params) - cls.PARAMETERS)
+        if unknown:
+            raise ValueError(f"{where}: unsupported medium parameter(s) {unknown}.")
+        scale = float(params.get("scale", 1.0))
+        sigma_t = tabulate_spectrum(params.get("sigma_t", 1.0), RGBUnboundedSpectrum) * scale
+        albedo = tabulate_spectrum(params.get("albedo", 0.75), RGBAlbedoSpectrum)
+        g = float(params.get("g", 0.0))
+        for name, v, hi in (("sigma_t", sigma_t, np.inf), ("albedo", albedo, 1.0)):
+            if not np.all(np.isfinite(v)) or np.any(v < 0) or np.any(v > hi):
+                raise ValueError(
+                    f"{where}: medium parameter {name!r} must be finite and in [0, {hi}] at "
+                    f"every wavelength, got values in [{np.min(v)}, {np.max(v)}]."
+                )
+        if not -1.0 < g < 1.0:
+            raise ValueError(f"{where}: the phase function's g must be in (-1, 1), got {g}.")
+        return cls(
+            SpectrumTable(jnp.asarray(sigma_t[None], jnp.float32)),
+            SpectrumTable(jnp.asarray(albedo[None], jnp.float32)),
+            jnp.asarray([g], jnp.float32),
+        )
 
     @property
     def n_rows(self) -> int:

@@ -6,7 +6,7 @@ from ...camera import AbstractFilter, PinholeCamera
 from .._integrators import AbstractIntegrator
 from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
 from .._lights import AreaLight
-from .._registry import FILTERS, INTEGRATORS, LIGHTS, MATERIALS
+from .._registry import FILTERS, INTEGRATORS, LIGHTS, MATERIALS, MEDIA
 from .._render_scene import RenderScene
 from ._description import SceneDescription, SceneError
 
@@ -174,6 +174,7 @@ def compile_scene(
         emitter_two_sided=[e.two_sided for e in description.emitters],
         lights=scene_lights(description),
         accelerator=accelerator,
+        **_scene_media(description, where),
     )
     cam = description.camera
     camera = PinholeCamera.from_to_world(
@@ -186,3 +187,28 @@ def compile_scene(
         far_clip=cam.far_clip,
     )
     return scene, camera, scene_filter(description)
+
+
+def _scene_media(description: SceneDescription, where: str) -> dict:
+    """The media keywords of `RenderScene.from_triangles`: each medium's `type` names its
+    plugin in the `MEDIA` registry, which reads its parameters (`from_properties`)."""
+    if not description.media:
+        return {}
+    media = []
+    for m in description.media:
+        if m.type not in MEDIA:
+            raise SceneError(
+                f"{where}: medium {m.name!r} has type {m.type!r}; supported: {sorted(MEDIA)}."
+            )
+        try:
+            media.append(
+                MEDIA[m.type].from_properties(m.params, where=f"{where}: medium {m.name!r}")
+            )
+        except ValueError as e:
+            raise SceneError(str(e)) from None
+    return {
+        "media": media,
+        "face_interior": description.face_interior,
+        "face_exterior": description.face_exterior,
+        "camera_medium": description.camera_medium,
+    }

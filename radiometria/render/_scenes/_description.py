@@ -33,6 +33,7 @@ __all__ = [
     "CameraDescription",
     "FilmDescription",
     "Material",
+    "MediumDescription",
     "SceneDescription",
     "SceneError",
 ]
@@ -90,6 +91,30 @@ class Material:
     type: str
     params: dict
     two_sided: bool = False
+    name: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
+class MediumDescription:
+    """A participating medium: a Mitsuba-style medium type and its parameters (thesis ch. 4).
+
+    **Fields:**
+
+    - `type`: the medium plugin's name, a key of `radiometria.render._registry.MEDIA`
+        (`"homogeneous"`, `"heterogeneous"`).
+    - `params`: parameter name -> value as the file gives it: `sigma_t` and `albedo` as
+        spectral values (an RGB `sigma_t` is an unbounded spectrum, an RGB `albedo` an albedo
+        spectrum, thesis 2.2.3) or, for grids, `{"type": "gridvolume" | "constvolume", ...}`
+        dicts; `scale` a number [1]; `g` the Henyey-Greenstein mean cosine (0: isotropic).
+        Coefficients are per scene length unit. [scene units^-1]
+    - `name`: the id in the file, or a generated name.
+
+    !!! note "Thesis"
+        Section 1.3 and ch. 4; Mitsuba 3's medium plugins (`Jakob2022`).
+    """
+
+    type: str
+    params: dict
     name: str = ""
 
 
@@ -232,6 +257,11 @@ class SceneDescription:
     - `shape_names`: tuple of shape names.
     - `unit`: the length unit of the coordinates (e.g. `"mm"`), as a string.
     - `source`: where the scene came from (built-in name or path).
+    - `media`: tuple of `MediumDescription` (default none).
+    - `face_interior`, `face_exterior`: `(f,)` int32 medium index behind / in front of each
+        triangle's normal, -1 for a vacuum, -2 where the shape bounds no medium; `None` when
+        the scene has no media.
+    - `camera_medium`: index of the medium the camera is in, -1 for a vacuum.
 
     !!! note "Thesis"
         Ch. 8 (scene description for light transport); file formats of Mitsuba 3
@@ -255,6 +285,10 @@ class SceneDescription:
     unit: str = "scene units"
     source: str = ""
     lights: tuple = ()
+    media: tuple = ()
+    face_interior: np.ndarray | None = None
+    face_exterior: np.ndarray | None = None
+    camera_medium: int = -1
 
     def __post_init__(self):
         f = np.asarray(self.faces)
@@ -307,6 +341,8 @@ class ShapeDescription:
     material: int
     emitter: dict | None = None  # {"radiance": SpectralValue, "two_sided": bool}
     where: str = ""
+    interior: int = -2  # medium behind the normal (-1 vacuum, -2: no medium boundary)
+    exterior: int = -2  # medium in front of the normal
 
 
 def assemble(
@@ -322,9 +358,12 @@ def assemble(
     unit: str = "scene units",
     source: str = "",
     lights: tuple = (),
+    media: tuple = (),
+    camera_medium: int = -1,
 ) -> SceneDescription:
     """Validate the shapes (degenerate rule), merge them and build the emitters."""
     all_v, all_f, mat, emi, owner, emitters = [], [], [], [], [], []
+    sides: list[np.ndarray] = []
     offset = 0
     n_faces = 0
     for si, sh in enumerate(shapes):
@@ -341,6 +380,7 @@ def assemble(
         all_f.append(f + offset)
         mat.append(np.full(len(f), sh.material, np.int32))
         owner.append(np.full(len(f), si, np.int32))
+        sides.append(np.tile(np.array([[sh.interior, sh.exterior]], np.int32), (len(f), 1)))
         if sh.emitter is not None:
             if len(f) == 0:
                 raise SceneError(f"{sh.where or sh.name}: an emitter needs at least one triangle.")
@@ -380,6 +420,10 @@ def assemble(
         unit=unit,
         source=source,
         lights=tuple(lights),
+        media=tuple(media),
+        face_interior=cat(sides, (0, 2), np.int32)[:, 0] if media else None,
+        face_exterior=cat(sides, (0, 2), np.int32)[:, 1] if media else None,
+        camera_medium=camera_medium,
     )
 
 

@@ -62,6 +62,7 @@ from ._description import (
     look_at_matrix,
     read_scene_text,
 )
+from ._media_xml import extract_media
 from ._mesh_files import read_mesh
 
 __all__ = ["SPHERE_SUBDIVISIONS", "load_mitsuba_xml"]
@@ -779,6 +780,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     _collect(ctx, root, (path.resolve(),), elements, set(given))
     for ch in elements:
         _substitute(ctx, ch)
+    elements, media = extract_media(ctx, elements, properties=_properties, transform=_transform)
     materials: list[Material] = []
     default_material: list[int] = []
     shapes: list[ShapeDescription] = []
@@ -795,7 +797,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
             if "id" in ch.attrib:
                 ctx.refs[ch.attrib["id"]] = (ch, idx)
         elif ch.tag == "shape":
-            shapes.append(_shape(ctx, ch, materials, default_material))
+            shapes.append(media.bind(ch, _shape(ctx, ch, materials, default_material)))
         elif ch.tag == "emitter":
             lights.append(_light(ctx, ch))
         elif ch.tag == "sensor":
@@ -813,4 +815,5 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     return assemble(
         shapes, materials, camera, film, max_depth=max_depth, rr_depth=rr_depth, spp=spp,
         integrator=integrator, unit="file units", source=file, lights=tuple(lights),
+        **media.assemble_args(),
     )  # fmt: skip
