@@ -170,6 +170,17 @@ def _set(path, value):
     return edit
 
 
+def _drop_to_world_and_set(key, value):
+    """The camera from `origin`/`looks_towards`/`up` alone, with `key` replaced."""
+
+    def edit(d):
+        d["camera"].pop("to_world")
+        d["camera"][key] = value
+        return d
+
+    return edit
+
+
 JSON_CASES = [
     (
         "reflectance_negative",
@@ -195,6 +206,12 @@ JSON_CASES = [
         r"radiance_linear_srgb",
     ),
     ("vertex_index", _set(("shapes", 1, "faces"), [[0, 1, 9]]), r"outside"),
+    (
+        "camera_singular",
+        _set(("camera", "to_world"), [[1, 0, 0, 0], [0, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]),
+        r"camera\.to_world'?: degenerate camera transform",
+    ),
+    ("camera_up_parallel", _drop_to_world_and_set("up", [0, 0, -1]), r"degenerate camera"),
 ]
 
 

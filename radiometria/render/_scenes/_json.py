@@ -122,12 +122,17 @@ def _json_camera(cam: _Json) -> tuple[CameraDescription, tuple[int, int] | None]
     axis = _fov_axis(cam["fov_axis"].string(), cam["fov_axis"]) if cam.has("fov_axis") else "x"
     if cam.has("to_world"):
         m = cam["to_world"].array((4, 4))
-    elif cam.has("position"):
-        o = cam["position"].array((3,))
-        m = look_at_matrix(o, o + cam["direction"].array((3,)), cam["up"].array((3,)))
+        if not abs(np.linalg.det(m[:3, :3])) > 1e-12:
+            raise cam["to_world"].err("degenerate camera transform: its 3x3 part is singular")
     else:
-        o = cam["origin"].array((3,))
-        m = look_at_matrix(o, o + cam["looks_towards"].array((3,)), cam["up"].array((3,)))
+        key_o, key_d = (
+            ("position", "direction") if cam.has("position") else ("origin", "looks_towards")
+        )
+        o = cam[key_o].array((3,))
+        try:
+            m = look_at_matrix(o, o + cam[key_d].array((3,)), cam["up"].array((3,)))
+        except ValueError as e:
+            raise cam.err(f"degenerate camera ({key_o}, {key_d}, up): {e}") from None
     res = None
     if cam.has("recommended_resolution"):
         w, h = cam["recommended_resolution"].array((2,), dtype=np.int64)
