@@ -166,6 +166,7 @@ class _Walk(eqx.Module):
     face: Array
     surface: Array  # the walk ended on a non-null surface
     cos_o: Array
+    uv: Array  # (n, 2) surface coordinates of the surface hit (textures)
 
 
 def _bounded_loop(body, init, n: int, differentiable: bool, pending):
@@ -207,6 +208,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         face=jnp.zeros((n,), jnp.int32),
         surface=jnp.zeros((n,), bool),
         cos_o=jnp.zeros((n,), dtype),
+        uv=jnp.zeros((n, 2), dtype),
     )
     d = state.d
 
@@ -258,6 +260,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
             face=jnp.where(ended, v.face, w.face),
             surface=jnp.where(ended, hit & ~null_hit, w.surface),
             cos_o=jnp.where(ended, v.cos_o, w.cos_o),
+            uv=jnp.where(ended[:, None], v.uv, w.uv),
         )
 
     return _bounded_loop(body, walk, max_null, differentiable, lambda w: w.pending)
@@ -322,7 +325,7 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
 
     p = walk.p
     wo_l = to_local(wo)
-    bsdf = scene.materials.bxdf(material, wavelength_nm)
+    bsdf = scene.materials.bxdf(material, wavelength_nm, walk.uv)
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(p), axis=-1))
     media = scene.media
 
@@ -447,7 +450,7 @@ def volpath_radiance(
     origins: Float[Array, "n 3"],
     directions: Float[Array, "n 3"],
     wavelength_nm: Float[Array, "n k"],
-    u: Float[Array, "n d"],
+    u: Float[Array, "n d"] | None,
     *,
     max_depth: int,
     rr_depth: int = 5,
