@@ -86,12 +86,38 @@ _MAX_PIXELS = 2**31 - 2**20  # pixel indices are int32
 _FILM_BYTES_PER_PIXEL = 4 * 4 * 3  # float32 sums (H, W, 4), the developed image, a host copy
 
 
-def _available_host_memory() -> int:
-    """Bytes of host memory currently available (Linux sysconf; 8 GiB when unknown)."""
+def _read_int(path: str) -> int | None:
     try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return 8 * 2**30
+        with open(path) as f:
+            text = f.read().strip()
+    except OSError:
+        return None
+    return int(text) if text.isdigit() else None  # cgroup v2 writes "max" for no limit
+
+
+def _available_host_memory() -> int:
+    """Bytes of host memory a render may still allocate: Linux's `MemAvailable` (free memory
+    plus reclaimable caches; `SC_AVPHYS_PAGES`, the free pages only, where it is missing),
+    within the process's cgroup (container) limit; 8 GiB when neither is known."""
+    available = None
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    available = int(line.split()[1]) * 1024  # kB
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    if available is None:
+        try:
+            available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):
+            available = 8 * 2**30
+    limit = _read_int("/sys/fs/cgroup/memory.max")
+    if limit is not None:
+        used = _read_int("/sys/fs/cgroup/memory.current") or 0
+        available = min(available, max(limit - used, 0))
+    return available
 
 
 _PATH_BYTES = 4 * 512  # generous: a path's state, variates, footprint and temporaries (float32)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from radiometria.camera import PinholeCamera
-from radiometria.render import Path as PathIntegrator, render
+from radiometria.render import Path as PathIntegrator, _driver, render
 
 from ._synthetic import lit_box_camera, lit_box_scene
 
@@ -122,6 +122,39 @@ def test_render_refuses_absurd_resolution_before_allocating(box):
     with pytest.raises(ValueError, match="GiB|too large"):
         render(scene, camera=huge, spp=1, progress=False)
     assert time.perf_counter() - t0 < 5.0  # refused up front, nothing rendered or allocated
+
+
+def test_render_refuses_a_film_larger_than_memory_before_allocating(box, monkeypatch):
+    """With 1 GiB available, an 8192 x 8192 film (three float32 sums, the image and its host
+    copy: 48 B per pixel, 3 GiB) is refused with the size it needs, before any film exists."""
+
+    def no_film(*args, **kwargs):
+        raise AssertionError("the film was allocated")
+
+    monkeypatch.setattr(_driver, "_available_host_memory", lambda: 2**30)
+    monkeypatch.setattr(_driver, "Film", no_film)
+    scene, _ = box
+    cam = PinholeCamera.from_look_at(
+        np.zeros(3), np.array([0.0, 0, 1]), np.array([0.0, 1, 0]), 60.0, 8192, 8192
+    )
+    with pytest.raises(ValueError, match=r"8192 x 8192 film needs about 3\.0 GiB.*1\.0 GiB"):
+        render(scene, camera=cam, spp=1, progress=False)
+
+
+def test_available_host_memory_reads_linux(monkeypatch):
+    """Linux: `MemAvailable` of /proc/meminfo (what the kernel can give without swapping),
+    not the smaller count of free pages."""
+    if not os.path.exists("/proc/meminfo"):
+        pytest.skip("not Linux")
+    with open("/proc/meminfo") as f:
+        fields = dict(line.split(":", 1) for line in f)
+    expected = int(fields["MemAvailable"].split()[0]) * 1024
+    got = _driver._available_host_memory()
+    limit = _driver._read_int("/sys/fs/cgroup/memory.max")
+    if limit is None:
+        assert abs(got - expected) < 0.05 * expected + 2**28  # the kernel's count moves
+    else:
+        assert got <= max(expected, limit)
 
 
 @pytest.mark.slow
