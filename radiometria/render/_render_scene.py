@@ -47,6 +47,9 @@ class RenderScene(eqx.Module):
         in Mitsuba, where only shapes with an `interior` or `exterior` change the medium.
         `None` when the scene has no media.
     - `camera_medium`: index of the medium the camera sits in, -1 for a vacuum (static).
+    - `face_uv`: `(f, 3, 2)` surface coordinates (u, v) at the three corners of each
+        triangle, interpolated with the hit's barycentrics for textures; `None` (meshes
+        without uvs) gives the hit's barycentrics $(b_1, b_2)$ as uv, as Mitsuba 3. [1]
 
     !!! note "Thesis"
         Chapter 8 (the scene of the light transport equation).
@@ -68,6 +71,7 @@ class RenderScene(eqx.Module):
     face_interior: Int[Array, " f"] | None = None  # medium behind each face (-1 vacuum, -2 keep)
     face_exterior: Int[Array, " f"] | None = None  # medium in front of each face
     camera_medium: int = eqx.field(static=True, default=-1)
+    face_uv: Float[Array, "f 3 2"] | None = None  # uv at each triangle's corners (textures)
 
     @classmethod
     def from_triangles(
@@ -88,6 +92,7 @@ class RenderScene(eqx.Module):
         face_interior=None,
         face_exterior=None,
         camera_medium: int = -1,
+        face_uv=None,
     ) -> "RenderScene":
         """Lay out a triangle scene (NumPy work, done once, outside `jit`).
 
@@ -118,6 +123,8 @@ class RenderScene(eqx.Module):
         - `face_interior`, `face_exterior`: `(f,)` medium index behind / in front of each
             triangle, -1 for a vacuum, -2 for no boundary (default: all -2).
         - `camera_medium`: the medium the camera is in, -1 for a vacuum.
+        - `face_uv`: `(f, 3, 2)` uv at the corners of each triangle (textures), or `None`:
+            the hit's barycentrics serve as uv. [1]
         """
         vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
@@ -157,6 +164,14 @@ class RenderScene(eqx.Module):
         if not isinstance(accelerator, AbstractAccelerator):
             accelerator = build_accelerator(vertices, faces, kind=accelerator, dtype=dtype)
         media_fields = _media_fields(media, face_interior, face_exterior, camera_medium, n_faces)
+        if face_uv is not None:
+            face_uv = np.asarray(face_uv, np.float64)
+            if face_uv.shape != (n_faces, 3, 2) or not np.all(np.isfinite(face_uv)):
+                raise ValueError(
+                    f"`face_uv` must be finite, of shape ({n_faces}, 3, 2), got shape "
+                    f"{face_uv.shape}."
+                )
+            face_uv = jnp.asarray(face_uv, dtype)
         return cls(
             p0=p0,
             e1=e1,
@@ -166,6 +181,7 @@ class RenderScene(eqx.Module):
             materials=materials,
             light=light,
             accelerator=accelerator,
+            face_uv=face_uv,
             **media_fields,
         )
 

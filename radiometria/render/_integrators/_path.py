@@ -101,6 +101,7 @@ class _Vertex(eqx.Module):
     face: Array  # int32, clipped to a valid index when not `valid`
     t: Array  # ray parameter of the hit
     cos_o: Array  # cos between n and -ray direction (> 0: the ray hit the front face)
+    uv: Array  # (n, 2) surface coordinates for textures (RenderScene.face_uv)
 
 
 def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
@@ -114,7 +115,11 @@ def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
     b2 = hit.b2[:, None].astype(origins.dtype)
     p = scene.p0[face] + b1 * scene.e1[face] + b2 * scene.e2[face]
     n = scene.normal[face]
-    return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions))
+    uv = jnp.concatenate([b1, b2], axis=-1)  # Mitsuba's uv of a mesh without uvs
+    if scene.face_uv is not None:
+        c = scene.face_uv[face]
+        uv = (1.0 - b1 - b2) * c[:, 0] + b1 * c[:, 1] + b2 * c[:, 2]
+    return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions), uv=uv)
 
 
 def path_radiance(
@@ -341,7 +346,7 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
         return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
 
     wo_l = to_local(wo)
-    bsdf = scene.materials.bxdf(material, wavelength_nm)
+    bsdf = scene.materials.bxdf(material, wavelength_nm, v.uv)
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
 
     # Next-event estimation: a point on a light (e.g. an emissive triangle chosen by power x

@@ -16,6 +16,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import AbstractBxDF, BSDFSample
 from .._spectral import SpectralValue
+from .._textures import AbstractTexture, concatenate_textures
 
 __all__ = ["AbstractMaterial", "Properties"]
 
@@ -37,7 +38,9 @@ class AbstractMaterial(eqx.Module):
         only on the side the geometric normal points to.
     - `from_properties(params, two_sided=..., where=...)`: one material (one row) from a scene
         file's parameters, with Mitsuba's defaults.
-    - `bxdf(row, wavelength_nm)`: the BxDF of row `row[i]` at the wavelengths of path `i`.
+    - `bxdf(row, wavelength_nm)`: the BxDF of row `row[i]` at the wavelengths of path `i`;
+        with `USES_UV = True`, `bxdf(row, wavelength_nm, uv)` also gets the hits' surface
+        coordinates `uv` `(n, 2)` (or `None`) for its textures.
 
     Every field has the row axis first, so the materials of one kind in a scene are one
     plugin (`concatenate`), and plugins pass through `jit`, `vmap` and `grad`.
@@ -52,6 +55,7 @@ class AbstractMaterial(eqx.Module):
     NAME: ClassVar[str]
     PARAMETERS: ClassVar[frozenset[str]]
     TRANSMISSIVE: ClassVar[bool] = False
+    USES_UV: ClassVar[bool] = False  # bxdf(row, wavelength_nm, uv): textured parameters
     two_sided: eqx.AbstractVar[Bool[Array, " m"]]
 
     @classmethod
@@ -63,7 +67,10 @@ class AbstractMaterial(eqx.Module):
 
     @abc.abstractmethod
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> AbstractBxDF:
-        """The BxDF of row `row[i]` at the wavelengths `wavelength_nm[i]` [nm] of path `i`."""
+        """The BxDF of row `row[i]` at the wavelengths `wavelength_nm[i]` [nm] of path `i`.
+
+        A plugin whose parameters may be textures (`USES_UV`) takes a third argument, `uv`:
+        `(n, 2)` surface coordinates of the hits [1], or `None`."""
 
     @property
     def n_rows(self) -> int:
@@ -78,7 +85,13 @@ def concatenate(materials: "list[AbstractMaterial]") -> AbstractMaterial:
         raise TypeError(f"can only concatenate materials of one kind, got {kinds}.")
     if len(materials) == 1:
         return materials[0]
-    return jax.tree.map(lambda *xs: jnp.concatenate(xs, axis=0), *materials)
+
+    def join(*xs):
+        if isinstance(xs[0], AbstractTexture):  # textures of different kinds: a stack
+            return concatenate_textures(list(xs))
+        return jnp.concatenate(xs, axis=0)
+
+    return jax.tree.map(join, *materials, is_leaf=lambda x: isinstance(x, AbstractTexture))
 
 
 def unknown_parameters(params: Properties, cls: type, where: str) -> None:

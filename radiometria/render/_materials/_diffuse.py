@@ -7,7 +7,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import DiffuseBxDF
 from ...upsampling import RGBAlbedoSpectrum
-from .._textures import AbstractTexture, ConstantTexture
+from .._textures import AbstractTexture, ConstantTexture, texture_parameter
 from ._base import AbstractMaterial, Properties, unknown_parameters
 
 
@@ -17,7 +17,8 @@ class Diffuse(AbstractMaterial):
     **Fields:**
 
     - `reflectance`: a texture of $R$ in [0, 1] per material (default 0.5; an RGB triple is
-        upsampled as a bounded `RGBAlbedoSpectrum`). [1]
+        upsampled as a bounded `RGBAlbedoSpectrum`; a scene's `bitmap` or `checkerboard`
+        texture, looked up at the hit's uv). [1]
     - `two_sided`: `(m,)` bool, scatter on both sides.
 
     !!! note "Thesis"
@@ -29,6 +30,7 @@ class Diffuse(AbstractMaterial):
 
     NAME: ClassVar[str] = "diffuse"
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"reflectance"})
+    USES_UV: ClassVar[bool] = True
     reflectance: AbstractTexture
     two_sided: Bool[Array, " m"]
 
@@ -36,10 +38,15 @@ class Diffuse(AbstractMaterial):
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene") -> "Diffuse":
         unknown_parameters(params, cls, where)
         reflectance = params.get("reflectance", 0.5)
-        return cls(
-            ConstantTexture.from_values([reflectance], RGBAlbedoSpectrum),
-            jnp.asarray([two_sided], bool),
-        )
+        texture = texture_parameter(reflectance, RGBAlbedoSpectrum, "reflectance", where)
+        if texture is None:
+            texture = ConstantTexture.from_values([reflectance], RGBAlbedoSpectrum)
+        return cls(texture, jnp.asarray([two_sided], bool))
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> DiffuseBxDF:
-        return DiffuseBxDF(self.reflectance(row, wavelength_nm))
+    def bxdf(
+        self,
+        row: Int[Array, " n"],
+        wavelength_nm: Float[Array, "n k"],
+        uv: Float[Array, "n 2"] | None = None,
+    ) -> DiffuseBxDF:
+        return DiffuseBxDF(self.reflectance(row, wavelength_nm, uv))

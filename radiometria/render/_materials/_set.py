@@ -24,7 +24,7 @@ class MaterialSet(eqx.Module):
     - `two_sided`: `(m,)` bool, materials that scatter on both sides.
     - `transmissive`: `(m,)` bool, materials that transmit (both sides bound a medium).
 
-    At a hit, `bxdf(material, wavelength_nm)` is the plugin's own BxDF when the scene has one
+    At a hit, `bxdf(material, wavelength_nm, uv)` is the plugin's own BxDF when the scene has one
     kind; otherwise every kind's BxDF is evaluated and each path takes its own (`where`), the
     usual way to vectorise a mixture of kinds.
 
@@ -75,12 +75,18 @@ class MaterialSet(eqx.Module):
         """Number of materials `m`."""
         return int(self.plugin_of.shape[0])
 
-    def bxdf(self, material: Int[Array, " n"], wavelength_nm) -> AbstractBxDF:
-        """The BxDF of each path's material at its wavelengths (`(n,)`, `(n, k)` [nm])."""
+    def bxdf(self, material: Int[Array, " n"], wavelength_nm, uv=None) -> AbstractBxDF:
+        """The BxDF of each path's material at its wavelengths (`(n,)`, `(n, k)` [nm]) and
+        surface coordinates `uv` (`(n, 2)` [1], or `None`: textures are looked up at (0, 0)),
+        which plugins with textured parameters (`USES_UV`) receive."""
         rows = material if self.identity_rows else self.row_of[material]
+
+        def one(p):
+            return p.bxdf(rows, wavelength_nm, uv) if p.USES_UV else p.bxdf(rows, wavelength_nm)
+
         if len(self.plugins) == 1:
-            return self.plugins[0].bxdf(rows, wavelength_nm)
-        parts = tuple(p.bxdf(rows, wavelength_nm) for p in self.plugins)
+            return one(self.plugins[0])
+        parts = tuple(one(p) for p in self.plugins)
         return _Mixture(self.plugin_of[material], parts)
 
 
