@@ -64,6 +64,7 @@ from ._description import (
 )
 from ._media_xml import extract_media
 from ._mesh_files import read_mesh
+from ._textures_xml import texture_property, texture_ref_properties, texture_spec
 
 __all__ = ["SPHERE_SUBDIVISIONS", "load_mitsuba_xml"]
 
@@ -311,8 +312,9 @@ def _properties(ctx: _Ctx, node: _Node, allowed: set[str]) -> dict:
     for ch in node.children:
         if ch.tag not in _VALUE_TAGS:
             continue
-        if ch.tag == "texture":
-            raise ctx.err(ch, f"textures are not supported (line {ch.line})")
+        if ch.tag == "texture":  # a texture parameter (_textures_xml)
+            name, out[name] = texture_property(ctx, ch, node, allowed, _properties)
+            continue
         name = ctx.attr(ch, "name")
         if name not in allowed:
             raise ctx.err(ch, f"unsupported parameter '{name}' of <{node.tag} type="
@@ -434,8 +436,9 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
             node, f"unsupported BSDF type '{kind}' (line {node.line}); supported: "
             f"{sorted([*MATERIALS, 'twosided'])}"
         )  # fmt: skip
-    _only_children(ctx, node, set())
+    _only_children(ctx, node, {"ref"})
     params = _properties(ctx, node, set(MATERIALS[kind].PARAMETERS))
+    params.update(texture_ref_properties(ctx, node, _ref))  # <ref name=... id=texture>
     if kind == "diffuse" and "reflectance" not in params:
         params["reflectance"] = 0.5
     materials.append(Material(kind, params, two_sided=False, name=name))
@@ -800,6 +803,8 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
             shapes.append(media.bind(ch, _shape(ctx, ch, materials, default_material)))
         elif ch.tag == "emitter":
             lights.append(_light(ctx, ch))
+        elif ch.tag == "texture" and "id" in ch.attrib:  # used by <ref> (_textures_xml)
+            ctx.refs[ch.attrib["id"]] = (ch, texture_spec(ctx, ch, _properties))
         elif ch.tag == "sensor":
             camera, film, spp = _sensor(ctx, ch)
         elif ch.tag == "integrator":
