@@ -20,7 +20,9 @@ chapter 4 (energy transport in a medium) as a title only; `Pharr2023` ch. 11, `N
   tracking (`delta_tracking`, `FreeFlightSample`, `delta_tracking_transmittance`), ratio
   tracking and residual ratio tracking.
 - Media (`AbstractMedium`, `MediumInteraction`): `HomogeneousMedium` at a path's hero
-  wavelengths. Absorption alone is also `radiometria.radiometry.beer_lambert_transmittance`.
+  wavelengths, and `GridMedium` (density and albedo grids with trilinear lookup in a box
+  placed by `to_world`, spectral tracking and ratio tracking under a grey majorant;
+  `trilinear_lookup`). Absorption alone is also `radiometria.radiometry.beer_lambert_transmittance`.
 """
 
 from ._coefficients import (
@@ -47,6 +49,7 @@ from ._estimators import (
     residual_ratio_tracking_transmittance as residual_ratio_tracking_transmittance,
     sample_homogeneous_free_flight as sample_homogeneous_free_flight,
 )
+from ._grid import GridMedium as GridMedium, trilinear_lookup as trilinear_lookup
 from ._henyey_greenstein import HenyeyGreenstein as HenyeyGreenstein
 from ._homogeneous import HomogeneousMedium as HomogeneousMedium
 from ._isotropic import IsotropicPhaseFunction as IsotropicPhaseFunction

@@ -1,0 +1,111 @@
+"""GridMedium: trilinear lookup, ratio-tracked transmittance and spectral tracking on a
+linear-ramp grid against closed-form optical depths (SciPy quadrature of the ramp)."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from radiometria.media import GridMedium, IsotropicPhaseFunction, trilinear_lookup
+
+N = 20000
+X = 8
+
+
+def _ramp_grid():
+    """Density 2x at the voxel centres along x (constant in y and z), shape (2, 3, X)."""
+    centres = (np.arange(X) + 0.5) / X
+    return np.broadcast_to(2.0 * centres, (2, 3, X)).copy(), centres
+
+
+def _tau_ramp():
+    """Optical depth of the ramp along local x through the whole box, for s = 1, with the
+    box scaled by 2: integral of 2 * interp(x) dx over [0, 1] (clamped ends)."""
+    _, centres = _ramp_grid()
+    val, _ = quad(lambda x: np.interp(x, centres, 2.0 * centres), 0.0, 1.0, points=[centres[0],
+                  centres[-1]])  # fmt: skip
+    return 2.0 * val
+
+
+def test_trilinear_lookup_reproduces_an_affine_field_between_voxel_centres():
+    rng = np.random.default_rng(0)
+    shape = (4, 5, 6)  # Z, Y, X
+    zc, yc, xc = [(np.arange(s) + 0.5) / s for s in shape]
+    coef = np.array([0.3, -0.7, 1.1])
+    grid = 2.0 + coef[0] * xc[None, None, :] + coef[1] * yc[None, :, None]
+    grid = grid + coef[2] * zc[:, None, None]
+    lo = np.array([xc[0], yc[0], zc[0]])
+    hi = np.array([xc[-1], yc[-1], zc[-1]])
+    p = lo + (hi - lo) * rng.random((200, 3))
+    got = np.asarray(trilinear_lookup(jnp.asarray(grid), jnp.asarray(p)))
+    np.testing.assert_allclose(got, 2.0 + p @ coef, rtol=1e-12)
+    # Outside the unit box the medium is empty; at the faces values are clamped.
+    out = trilinear_lookup(jnp.asarray(grid), jnp.asarray([[1.1, 0.5, 0.5], [0.0, 0.0, 0.0]]))
+    np.testing.assert_allclose(np.asarray(out), [0.0, grid[0, 0, 0]], rtol=1e-12)
+
+
+def _medium(s, albedo=0.8):
+    grid, _ = _ramp_grid()
+    return GridMedium(
+        density=jnp.asarray(grid),
+        sigma_t=jnp.asarray(s),
+        albedo=albedo,
+        phase=IsotropicPhaseFunction(),
+        to_world=np.diag([2.0, 2.0, 2.0, 1.0]),
+    )
+
+
+def _rays(n):
+    o = np.tile([-1.0, 1.0, 1.0], (n, 1))  # starts outside the box: clipping is exercised
+    w = np.tile([1.0, 0.0, 0.0], (n, 1))
+    lam = np.tile([500.0, 600.0], (n, 1))
+    u = jax.random.uniform(jax.random.key(3), (n, 2), jnp.float64)
+    return jnp.asarray(o), jnp.asarray(w), jnp.full((n,), 4.0), jnp.asarray(lam), u
+
+
+def test_ratio_tracking_through_a_ramp_grid_matches_the_closed_form_optical_depth():
+    s = np.array([0.5, 1.0])
+    tau = _tau_ramp() * s
+    assert np.isclose(_tau_ramp(), 2.0, rtol=1e-9)  # the quadrature itself: 2 * 1.0
+    o, w, t_max, lam, u = _rays(N)
+    tr = np.asarray(_medium(s).transmittance(o, w, t_max, lam, u))
+    mean = tr.mean(axis=0)
+    se = tr.std(axis=0) / np.sqrt(N)
+    assert np.all(np.abs(mean - np.exp(-tau)) < 4 * se + 1e-4), (mean, np.exp(-tau), se)
+    # A segment ending halfway through the box: local x in [0, 0.5].
+    half, _ = quad(lambda x: np.interp(x, (np.arange(X) + 0.5) / X,
+                   2.0 * (np.arange(X) + 0.5) / X), 0.0, 0.5)  # fmt: skip
+    tr_h = np.asarray(_medium(s).transmittance(o, w, jnp.full((N,), 2.0), lam, u))
+    se_h = tr_h.std(axis=0) / np.sqrt(N)
+    assert np.all(np.abs(tr_h.mean(axis=0) - np.exp(-2.0 * half * s)) < 4 * se_h + 1e-4)
+
+
+def test_spectral_tracking_is_unbiased_at_every_wavelength():
+    """E[w_j 1_no event] = T_j and E[w_j 1_event] = albedo (1 - T_j) for a constant albedo."""
+    s = np.array([0.5, 1.5])
+    albedo = np.array([0.9, 0.6])
+    tau = _tau_ramp() * s
+    o, w, t_max, lam, u = _rays(N)
+    mi = _medium(s, albedo).sample_free_flight(o, w, t_max, lam, u)
+    wgt = np.asarray(mi.weight)
+    ev = np.asarray(mi.scattered)[:, None]
+    for est, expected in ((wgt * ~ev, np.exp(-tau)), (wgt * ev, albedo * (1 - np.exp(-tau)))):
+        mean, se = est.mean(axis=0), est.std(axis=0) / np.sqrt(N)
+        assert np.all(np.abs(mean - expected) < 4 * se + 1e-4), (mean, expected, se)
+    # Events lie inside the box (world x in [0, 2]) and the distance is the path's.
+    t = np.asarray(mi.t)
+    assert np.all((t[ev[:, 0]] >= 1.0) & (t[ev[:, 0]] <= 3.0))
+    assert np.all(t[~ev[:, 0]] == 4.0)
+
+
+def test_grid_medium_rejects_bad_grids():
+    iso = IsotropicPhaseFunction()
+    with pytest.raises(ValueError, match="density"):
+        GridMedium(-jnp.ones((2, 2, 2)), 1.0, 0.5, iso)
+    with pytest.raises(ValueError, match="density"):
+        GridMedium(jnp.full((2, 2, 2), jnp.nan), 1.0, 0.5, iso)
+    with pytest.raises(ValueError, match="albedo"):
+        GridMedium(jnp.ones((2, 2, 2)), 1.0, 1.5, iso)
+    with pytest.raises(ValueError, match="to_world"):
+        GridMedium(jnp.ones((2, 2, 2)), 1.0, 0.5, iso, to_world=np.zeros((4, 4)))
