@@ -50,6 +50,8 @@ class RenderScene(eqx.Module):
     - `face_uv`: `(f, 3, 2)` surface coordinates (u, v) at the three corners of each
         triangle, interpolated with the hit's barycentrics for textures; `None` (meshes
         without uvs) gives the hit's barycentrics $(b_1, b_2)$ as uv, as Mitsuba 3. [1]
+    - `shading_normal`: `(f, 3, 3)` unit normals at the three corners of each triangle
+        (vertex normals), interpolated into the shading normal; `None`: flat shading.
 
     !!! note "Thesis"
         Chapter 8 (the scene of the light transport equation).
@@ -72,6 +74,7 @@ class RenderScene(eqx.Module):
     face_exterior: Int[Array, " f"] | None = None  # medium in front of each face
     camera_medium: int = eqx.field(static=True, default=-1)
     face_uv: Float[Array, "f 3 2"] | None = None  # uv at each triangle's corners (textures)
+    shading_normal: Float[Array, "f 3 3"] | None = None  # unit normals at the corners
 
     @classmethod
     def from_triangles(
@@ -93,6 +96,7 @@ class RenderScene(eqx.Module):
         face_exterior=None,
         camera_medium: int = -1,
         face_uv=None,
+        shading_normal=None,
     ) -> "RenderScene":
         """Lay out a triangle scene (NumPy work, done once, outside `jit`).
 
@@ -125,6 +129,10 @@ class RenderScene(eqx.Module):
         - `camera_medium`: the medium the camera is in, -1 for a vacuum.
         - `face_uv`: `(f, 3, 2)` uv at the corners of each triangle (textures), or `None`:
             the hit's barycentrics serve as uv. [1]
+        - `shading_normal`: `(f, 3, 3)` unit normals at the corners of each triangle,
+            interpolated with the hit's barycentrics into the shading normal that orients
+            the BSDF's frame (Mitsuba's vertex normals; `Pharr2023` §3.10.1), or `None`: the
+            geometric normals shade. Rows equal to the face's normal shade flat.
         """
         vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
@@ -172,6 +180,14 @@ class RenderScene(eqx.Module):
                     f"{face_uv.shape}."
                 )
             face_uv = jnp.asarray(face_uv, dtype)
+        if shading_normal is not None:
+            shading_normal = np.asarray(shading_normal, np.float64)
+            if shading_normal.shape != (n_faces, 3, 3) or not np.all(np.isfinite(shading_normal)):
+                raise ValueError(
+                    f"`shading_normal` must be finite, of shape ({n_faces}, 3, 3), got shape "
+                    f"{shading_normal.shape}."
+                )
+            shading_normal = jnp.asarray(shading_normal, dtype)
         return cls(
             p0=p0,
             e1=e1,
@@ -182,6 +198,7 @@ class RenderScene(eqx.Module):
             light=light,
             accelerator=accelerator,
             face_uv=face_uv,
+            shading_normal=shading_normal,
             **media_fields,
         )
 

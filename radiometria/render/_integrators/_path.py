@@ -102,6 +102,7 @@ class _Vertex(eqx.Module):
     t: Array  # ray parameter of the hit
     cos_o: Array  # cos between n and -ray direction (> 0: the ray hit the front face)
     uv: Array  # (n, 2) surface coordinates for textures (RenderScene.face_uv)
+    ns: Array  # shading normal: interpolated vertex normals (RenderScene.shading_normal), or n
 
 
 def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
@@ -119,7 +120,13 @@ def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
     if scene.face_uv is not None:
         c = scene.face_uv[face]
         uv = (1.0 - b1 - b2) * c[:, 0] + b1 * c[:, 1] + b2 * c[:, 2]
-    return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions), uv=uv)
+    ns = n
+    if scene.shading_normal is not None:  # Mitsuba's vertex normals, interpolated
+        c = scene.shading_normal[face]
+        ns = (1.0 - b1 - b2) * c[:, 0] + b1 * c[:, 1] + b2 * c[:, 2]
+        length = jnp.sqrt(dot(ns, ns))[:, None]
+        ns = jnp.where(length > 0, ns / jnp.where(length > 0, length, 1.0), n)
+    return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions), uv=uv, ns=ns)
 
 
 def path_radiance(
@@ -331,11 +338,13 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     material = scene.face_material[v.face]
     two_sided = scene.materials.two_sided[material]
     transmissive = scene.materials.transmissive[material]
-    # Shading frame: the face normal, flipped towards wo for two-sided reflectors. A ray
-    # arriving at the back of a one-sided reflector ends there (Mitsuba's one-sided BSDFs);
-    # dielectrics keep the normal, and wo below it means the ray is inside.
+    # Shading frame: the shading normal (interpolated vertex normals, else the face normal),
+    # flipped towards wo for two-sided reflectors. A ray arriving at the back of a one-sided
+    # reflector ends there (Mitsuba's one-sided BSDFs); dielectrics keep the normal, and wo
+    # below it means the ray is inside. Which side was hit, and where rays leave from, follow
+    # the geometric normal (no light leaks through a surface; Mitsuba and pbrt alike).
     front = v.cos_o > 0
-    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.n, v.n)
+    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.ns, v.ns)
     alive = state.alive & (front | two_sided | transmissive)
     s, t = coordinate_system(n)
 

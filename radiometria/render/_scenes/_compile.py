@@ -175,6 +175,8 @@ def compile_scene(
         lights=scene_lights(description),
         accelerator=accelerator,
         **_scene_media(description, where),
+        face_uv=face_uvs(description),
+        **_surface_attributes(description),
     )
     cam = description.camera
     camera = PinholeCamera.from_to_world(
@@ -187,6 +189,33 @@ def compile_scene(
         far_clip=cam.far_clip,
     )
     return scene, camera, scene_filter(description)
+
+
+def _surface_attributes(description: SceneDescription) -> dict:
+    """The `shading_normal` keyword of `RenderScene.from_triangles`: each triangle's corner
+    values of the description's per-vertex normals; a triangle of a shape without normals
+    gets its face normal at every corner (flat shading)."""
+    if description.vertex_normals is None or not len(description.faces):
+        return {}
+    faces = np.asarray(description.faces, np.int64)
+    n = np.asarray(description.vertex_normals, np.float64)[faces]
+    v = np.asarray(description.vertices, np.float64)[faces]
+    g = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    g = g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
+    flat = np.isnan(n).any(axis=(1, 2))
+    return {"shading_normal": np.where(flat[:, None, None], g[:, None, :], n)}
+
+
+def face_uvs(description: SceneDescription) -> np.ndarray | None:
+    """`(f, 3, 2)` uv at the corners of each triangle from the description's per-vertex uvs
+    (`RenderScene.from_triangles(face_uv=...)`), or `None` when no shape has uvs. A triangle
+    of a shape without uvs gets (0, 0), (1, 0), (0, 1), whose interpolation is the
+    barycentric uv Mitsuba gives such meshes."""
+    if description.vertex_uvs is None or not len(description.faces):
+        return None
+    uv = np.asarray(description.vertex_uvs, np.float64)[np.asarray(description.faces, np.int64)]
+    bary = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    return np.where(np.isnan(uv).any(axis=(1, 2))[:, None, None], bary, uv)
 
 
 def _scene_media(description: SceneDescription, where: str) -> dict:

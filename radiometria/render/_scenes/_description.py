@@ -262,6 +262,11 @@ class SceneDescription:
         triangle's normal, -1 for a vacuum, -2 where the shape bounds no medium; `None` when
         the scene has no media.
     - `camera_medium`: index of the medium the camera is in, -1 for a vacuum.
+    - `vertex_normals`: `(v, 3)` unit shading normals, interpolated across each triangle
+        (Mitsuba's vertex normals), NaN rows for the vertices of shapes shaded by their face
+        normals; `None` when no shape has any.
+    - `vertex_uvs`: `(v, 2)` texture coordinates, NaN rows for the vertices of shapes without
+        uvs; `None` when no shape has any. [1]
 
     !!! note "Thesis"
         Ch. 8 (scene description for light transport); file formats of Mitsuba 3
@@ -289,6 +294,8 @@ class SceneDescription:
     face_interior: np.ndarray | None = None
     face_exterior: np.ndarray | None = None
     camera_medium: int = -1
+    vertex_normals: np.ndarray | None = None
+    vertex_uvs: np.ndarray | None = None
 
     def __post_init__(self):
         f = np.asarray(self.faces)
@@ -343,6 +350,8 @@ class ShapeDescription:
     where: str = ""
     interior: int = -2  # medium behind the normal (-1 vacuum, -2: no medium boundary)
     exterior: int = -2  # medium in front of the normal
+    normals: np.ndarray | None = None  # (v, 3) shading normals, or None: face normals shade
+    uvs: np.ndarray | None = None  # (v, 2) texture coordinates, or None
 
 
 def assemble(
@@ -364,6 +373,8 @@ def assemble(
     """Validate the shapes (degenerate rule), merge them and build the emitters."""
     all_v, all_f, mat, emi, owner, emitters = [], [], [], [], [], []
     sides: list[np.ndarray] = []
+    normals: list[np.ndarray] = []
+    uvs: list[np.ndarray] = []
     offset = 0
     n_faces = 0
     for si, sh in enumerate(shapes):
@@ -378,6 +389,12 @@ def assemble(
         f = f[keep].astype(np.int64)
         all_v.append(v)
         all_f.append(f + offset)
+        for attr, out, cols in ((sh.normals, normals, 3), (sh.uvs, uvs, 2)):
+            a = np.full((len(v), cols), np.nan) if attr is None else np.asarray(attr, np.float64)
+            if a.shape != (len(v), cols):
+                raise SceneError(f"{sh.where or sh.name}: per-vertex attribute of shape "
+                                 f"{a.shape}, expected ({len(v)}, {cols}).")  # fmt: skip
+            out.append(a)
         mat.append(np.full(len(f), sh.material, np.int32))
         owner.append(np.full(len(f), si, np.int32))
         sides.append(np.tile(np.array([[sh.interior, sh.exterior]], np.int32), (len(f), 1)))
@@ -424,7 +441,16 @@ def assemble(
         face_interior=cat(sides, (0, 2), np.int32)[:, 0] if media else None,
         face_exterior=cat(sides, (0, 2), np.int32)[:, 1] if media else None,
         camera_medium=camera_medium,
+        vertex_normals=_attribute(normals, [s.normals for s in shapes], 3),
+        vertex_uvs=_attribute(uvs, [s.uvs for s in shapes], 2),
     )
+
+
+def _attribute(parts: list, given: list, cols: int) -> np.ndarray | None:
+    """Merged per-vertex attribute (NaN rows where a shape has none), `None` if none has."""
+    if all(g is None for g in given):
+        return None
+    return np.concatenate(parts) if parts else np.zeros((0, cols))
 
 
 def look_at_matrix(origin, target, up) -> np.ndarray:

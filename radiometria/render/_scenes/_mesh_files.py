@@ -149,13 +149,55 @@ def _obj_problem(data: bytes, n_vertices: int | None) -> str | None:
     return None
 
 
-def read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices `(v, 3)` float64 and faces `(f, 3)` int64 of a mesh file, checked.
+def _attribute(a, n: int, cols: int) -> np.ndarray | None:
+    """A per-vertex attribute array of the loaders, or `None` when absent or misshapen."""
+    if a is None:
+        return None
+    a = np.asarray(a, dtype=np.float64)
+    return a.reshape(n, cols) if a.size == n * cols else None
+
+
+def _load(path: Path, suffix: str):
+    """Vertices, faces, vertex normals and uvs (`None` when the file has none) of a mesh
+    file. OBJ and PLY go through trimesh's format readers directly: `trimesh.Trimesh` drops
+    file normals that disagree with its face normals, which Mitsuba keeps."""
+    import trimesh
+    from trimesh.exchange.obj import load_obj
+    from trimesh.exchange.ply import load_ply
+
+    if suffix not in (".obj", ".ply"):
+        mesh = trimesh.load(str(path), force="mesh", process=False)
+        v = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
+        f = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
+        return v.reshape(-1, 3), f.reshape(-1, 3), None, None
+    with open(path, "rb") as fh:
+        if suffix == ".ply":
+            parts = [load_ply(fh)]
+        else:
+            parts = list(load_obj(fh, skip_materials=True).get("geometry", {}).values())
+    vs, fs, ns, uvs, offset = [], [], [], [], 0
+    for g in parts:
+        v = np.asarray(g.get("vertices", np.zeros((0, 3))), dtype=np.float64).reshape(-1, 3)
+        f = np.asarray(g.get("faces", np.zeros((0, 3))), dtype=np.int64).reshape(-1, 3)
+        vs.append(v)
+        fs.append(f + offset)
+        ns.append(_attribute(g.get("vertex_normals"), len(v), 3))
+        uvs.append(_attribute(getattr(g.get("visual"), "uv", None), len(v), 2))
+        offset += len(v)
+    if not vs:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), None, None
+    n = np.concatenate(ns) if all(x is not None for x in ns) else None
+    uv = np.concatenate(uvs) if all(x is not None for x in uvs) else None
+    return np.concatenate(vs), np.concatenate(fs), n, uv
+
+
+def read_mesh(path: Path, where: str, *, attributes: bool = False):
+    """Vertices `(v, 3)` float64 and faces `(f, 3)` int64 of a mesh file, checked; with
+    `attributes`, also the file's vertex normals `(v, 3)` and uvs `(v, 2)` (`None` when the
+    file has none; OBJ and PLY only).
 
     `where` prefixes every message (the scene file and line that names the mesh).
     """
-    import trimesh
-
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{where}mesh file not found: {path}")
@@ -179,21 +221,19 @@ def read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
         if _OBJ_ZERO_INDEX.search(data):
             raise _err(where, path, _obj_problem(data, None) or "a face index is 0.")
     try:
-        mesh = trimesh.load(str(path), force="mesh", process=False)
-        v = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
-        f = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
-        v, f = v.reshape(-1, 3), f.reshape(-1, 3)
+        v, f, normals, uvs = _load(path, suffix)
     except Exception as e:  # trimesh raises many types for a bad file
         detail = _obj_problem(data, None) if data is not None else None
         raise _err(
             where, path, detail or f"cannot read the mesh ({type(e).__name__}: {e})."
         ) from None
     if f.size == 0:
-        raise _err(where, path, "the file holds no triangles.")
+        detail = _obj_problem(data, None) if data is not None else None
+        raise _err(where, path, detail or "the file holds no triangles.")
     finite = np.isfinite(v).all(axis=1)
     in_range = ((f >= 0) & (f < len(v))).all(axis=1)
     if finite.all() and in_range.all():
-        return v, f
+        return (v, f, normals, uvs) if attributes else (v, f)
     detail = _obj_problem(data, len(v)) if data is not None else None
     if detail is None and not finite.all():
         k = int(np.argmin(finite))

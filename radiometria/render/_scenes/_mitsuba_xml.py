@@ -11,10 +11,15 @@ and rejects everything else with an error that names the file, the line and the 
   id is an error) and `<ref id>` where a BSDF goes (a shape, `twosided`).
 - file names (meshes, spectra, includes) resolve against the folder of the file that names
   them, then the `<path>` folders (the latest first), then the scene file's folder.
-- `shape`: `obj`, `ply` (`filename`), `rectangle` ([-1, 1]^2 at z = 0, normal +z), `cube`
-  ([-1, 1]^3), `sphere` (`center`, `radius`; triangulated as an icosphere of
-  `SPHERE_SUBDIVISIONS` = 4 subdivisions, 5120 triangles); `to_world`, `flip_normals`,
-  `face_normals` (ignored); one `bsdf` (inline or `ref`) and one `area` emitter.
+- `shape`: `obj`, `ply` (`filename`; vertex normals and uvs kept, `flip_tex_coords` for
+  OBJ), `serialized` (`filename`, `shape_index`), `rectangle`, `disk`, `cube`, `cylinder`
+  (`radius`, `p0`, `p1`), `sphere` (`center`, `radius`), tessellated with Mitsuba's
+  parametrisation as described in `radiometria.render._scenes._shapes`; `to_world`,
+  `flip_normals` on all, `face_normals` on meshes, cylinders and spheres (without it, a mesh
+  without vertex normals gets Mitsuba's angle-weighted ones); one `bsdf` (inline or `ref`)
+  and one `area` emitter. `shapegroup` (with an `id`, at the top level, shapes without
+  emitters) and `instance` (one `ref` to a group and a `to_world`) are flattened into the
+  merged mesh.
 - `transform`: `matrix` (16 values, row-major), `translate`, `rotate` (axis and `angle` in
   degrees), `scale`, `lookat` (`origin`, `target`, `up`), applied in document order.
 - `bsdf`: every plugin of `radiometria.render._registry.MATERIALS` (`diffuse`,
@@ -34,9 +39,10 @@ and rejects everything else with an error that names the file, the line and the 
   (Mitsuba's wrapper that adds the moments of its one nested integrator to the film) renders
   its nested integrator.
 
-Textures, other plugins, shape groups and instances are not supported.
+Textures and other plugins are not supported.
 """
 
+import dataclasses
 import math
 import xml.parsers.expat
 from dataclasses import dataclass, field
@@ -45,10 +51,10 @@ from pathlib import Path
 import numpy as np
 
 from ...radiometry import AbstractSpectrum, BlackbodySpectrum, PiecewiseLinearSpectrum
-from .._geometry._mesh import icosphere
 from .._lights import read_envmap
 from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS
 from .._spectral import LinearRGB, SpectralValue
+from . import _shapes
 from ._description import (
     CameraDescription,
     FilmDescription,
@@ -64,11 +70,11 @@ from ._description import (
 )
 from ._media_xml import extract_media
 from ._mesh_files import read_mesh
+from ._serialized import read_serialized
+from ._shapes import ShapeMesh
 from ._textures_xml import texture_property, texture_ref_properties, texture_spec
 
-__all__ = ["SPHERE_SUBDIVISIONS", "load_mitsuba_xml"]
-
-SPHERE_SUBDIVISIONS = 4  # a Mitsuba `sphere` becomes icosphere(4): 5120 triangles
+__all__ = ["load_mitsuba_xml"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -512,55 +518,129 @@ def _light(ctx: _Ctx, node: _Node) -> LightDescription:
                             where=where)  # fmt: skip
 
 
-_RECT_V = np.array([[-1, -1, 0], [1, -1, 0], [-1, 1, 0], [1, 1, 0]], dtype=np.float64)
-_RECT_F = np.array([[1, 2, 0], [1, 3, 2]])
-# Mitsuba's cube: 4 vertices per face (for face normals), 12 triangles
-_CUBE_V = np.array(
-    [[1, -1, -1], [1, -1, 1], [-1, -1, 1], [-1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, 1, 1],
-     [1, 1, 1], [1, -1, -1], [1, 1, -1], [1, 1, 1], [1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1],
-     [-1, -1, 1], [-1, -1, 1], [-1, 1, 1], [-1, 1, -1], [-1, -1, -1], [1, 1, -1], [1, -1, -1],
-     [-1, -1, -1], [-1, 1, -1]], dtype=np.float64)  # fmt: skip
-_CUBE_F = (np.array([[0, 1, 2], [3, 0, 2]])[None] + 4 * np.arange(6)[:, None, None]).reshape(-1, 3)
-
+_MESH = {"to_world", "flip_normals", "face_normals"}
 _SHAPE_PARAMS = {
-    "obj": {"filename", "to_world", "flip_normals", "face_normals", "flip_tex_coords"},
-    "ply": {"filename", "to_world", "flip_normals", "face_normals"},
+    "obj": _MESH | {"filename", "flip_tex_coords"},
+    "ply": _MESH | {"filename"},
+    "serialized": _MESH | {"filename", "shape_index"},
     "rectangle": {"to_world", "flip_normals"},
+    "disk": {"to_world", "flip_normals"},
     "cube": {"to_world", "flip_normals"},
-    "sphere": {"to_world", "flip_normals", "center", "radius"},
+    "cylinder": _MESH | {"radius", "p0", "p1"},
+    "sphere": _MESH | {"center", "radius"},
+    "shapegroup": set(),
+    "instance": {"to_world"},
 }
+_FLAT = ("rectangle", "disk")  # shapes at z = 0: their to_world needs rank 2, others 3
+
+
+def _shape_mesh(ctx: _Ctx, node: _Node, kind: str, props: dict) -> ShapeMesh:
+    """The object-space mesh of a shape (before `to_world`)."""
+    loc = f"{node.file or ctx.file}:{node.line}: "
+    if kind in ("obj", "ply", "serialized"):
+        if "filename" not in props:
+            raise ctx.err(node, f"a '{kind}' shape needs a 'filename'")
+        path = ctx.resolve(node, props["filename"])
+        if kind == "serialized":
+            index = props.get("shape_index", 0)
+            if index < 0:
+                raise ctx.err(node, f"parameter 'shape_index' must be >= 0, got {index}")
+            mesh, _ = read_serialized(path, loc, index)
+        else:
+            v, f, n, uv = read_mesh(path, loc, attributes=True)
+            if uv is not None and kind == "obj" and props.get("flip_tex_coords", True):
+                uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=-1)  # Mitsuba's default
+            mesh = ShapeMesh(v, f, n, uv)
+        if mesh.normals is not None:  # zero-length file normals: Mitsuba's would be NaN
+            length = np.linalg.norm(mesh.normals, axis=1, keepdims=True)
+            if not np.all(length > 0):
+                mesh.normals = None
+            else:
+                mesh.normals = mesh.normals / length
+        if mesh.normals is None and not props.get("face_normals", False):
+            mesh.normals = _shapes.vertex_normals(mesh.vertices, mesh.faces)
+        return mesh
+    if kind in ("cylinder", "sphere"):
+        radius = props.get("radius", 1.0)
+        if not isinstance(radius, float) or not radius > 0:
+            raise ctx.err(node, f"parameter 'radius' must be a float > 0, got {radius!r}")
+        if kind == "sphere":
+            return _shapes.sphere(props.get("center", np.zeros(3)), radius)
+        p0, p1 = props.get("p0", np.zeros(3)), props.get("p1", np.array([0.0, 0.0, 1.0]))
+        if not np.linalg.norm(p1 - p0) > 0:
+            raise ctx.err(node, f"parameters 'p0' and 'p1' must differ, got {p0.tolist()} twice")
+        return _shapes.cylinder(radius, p0, p1)
+    return {"rectangle": _shapes.rectangle, "disk": _shapes.disk, "cube": _shapes.cube}[kind]()
+
+
+def _shape_list(
+    ctx: _Ctx, node: _Node, materials: list, default_material: list
+) -> list[ShapeDescription]:
+    """The shapes a top-level `<shape>` adds: one, none for a `shapegroup` (kept for its
+    instances) or the group's shapes under an `instance`'s `to_world`."""
+    kind = ctx.attr(node, "type")
+    groups = ctx.__dict__.setdefault("shape_groups", {})
+    if kind == "shapegroup":
+        _only_children(ctx, node, {"shape"})
+        if "id" not in node.attrib:
+            raise ctx.err(node, "a 'shapegroup' needs an 'id' (instances refer to it)")
+        members = []
+        for ch in node.children:
+            if ctx.attr(ch, "type") in ("shapegroup", "instance"):
+                raise ctx.err(ch, "a 'shapegroup' cannot hold a shapegroup or an instance")
+            if any(sub.tag == "emitter" for sub in ch.children):
+                raise ctx.err(ch, "shapes in a 'shapegroup' cannot be emitters (as in Mitsuba)")
+            members.append(_shape(ctx, ch, materials, default_material))
+        groups[node.attrib["id"]] = members
+        return []
+    if kind != "instance":
+        return [_shape(ctx, node, materials, default_material)]
+    _only_children(ctx, node, {"ref"})
+    props = _properties(ctx, node, _SHAPE_PARAMS["instance"])
+    refs = [ch for ch in node.children if ch.tag == "ref"]
+    if len(refs) != 1:
+        raise ctx.err(node, "an 'instance' needs exactly one <ref id> to a 'shapegroup'")
+    gid = ctx.attr(refs[0], "id")
+    if gid not in groups:
+        raise ctx.err(refs[0], f"no 'shapegroup' with id '{gid}' before this line")
+    m = props.get("to_world", np.eye(4))
+    name = node.attrib.get("id", f"instance@{node.line}")
+    out = []
+    for sh in groups[gid]:
+        mesh = ShapeMesh(sh.vertices, sh.faces, sh.normals, sh.uvs)
+        try:
+            mesh = _shapes.transform_mesh(mesh, m, dims=1)
+        except ValueError as e:
+            raise ctx.err(node, f"parameter 'to_world': {e}") from None
+        out.append(dataclasses.replace(
+            sh, name=f"{name}/{sh.name}", vertices=mesh.vertices, faces=mesh.faces,
+            normals=mesh.normals, where=f"{node.file or ctx.file}:{node.line}: instance "
+            f"'{name}' of '{gid}'",
+        ))  # fmt: skip
+    return out
 
 
 def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> ShapeDescription:
     kind = ctx.attr(node, "type")
-    if kind not in _SHAPE_PARAMS:
+    if kind not in _SHAPE_PARAMS or kind in ("shapegroup", "instance"):
         raise ctx.err(
             node, f"unsupported shape type '{kind}' (line {node.line}); supported: "
-            f"{sorted(_SHAPE_PARAMS)}"
+            f"{sorted(_SHAPE_PARAMS)} (shapegroup and instance at the top level only)"
         )  # fmt: skip
     _only_children(ctx, node, {"bsdf", "emitter", "ref"})
     props = _properties(ctx, node, _SHAPE_PARAMS[kind])
     where = f"{node.file or ctx.file}:{node.line}: shape '{node.attrib.get('id', kind)}'"
-    if kind in ("obj", "ply"):
-        if "filename" not in props:
-            raise ctx.err(node, f"a '{kind}' shape needs a 'filename'")
-        path = ctx.resolve(node, props["filename"])
-        v, f = read_mesh(path, f"{node.file or ctx.file}:{node.line}: ")
-    elif kind == "rectangle":
-        v, f = _RECT_V.copy(), _RECT_F.copy()
-    elif kind == "cube":
-        v, f = _CUBE_V.copy(), _CUBE_F.copy()
-    else:
-        v, f = icosphere(SPHERE_SUBDIVISIONS)
-        radius = props.get("radius", 1.0)
-        if not isinstance(radius, float) or radius <= 0:
-            raise ctx.err(node, "the sphere 'radius' must be a float > 0")
-        v = v * radius + props.get("center", np.zeros(3))
-    m = props.get("to_world", np.eye(4))
-    with np.errstate(over="ignore", invalid="ignore"):  # non-finite vertices are refused later
-        v = v @ m[:3, :3].T + m[:3, 3]
-    if props.get("flip_normals", False):
-        f = f[:, [0, 2, 1]]
+    mesh = _shape_mesh(ctx, node, kind, props)
+    if props.get("face_normals", False):
+        mesh.normals = None
+    dims = 2 if kind in _FLAT else 3 if kind not in ("obj", "ply", "serialized") else 1
+    try:
+        mesh = _shapes.transform_mesh(
+            mesh, props.get("to_world", np.eye(4)), flip_normals=props.get("flip_normals", False),
+            dims=dims,
+        )  # fmt: skip
+    except ValueError as e:
+        raise SceneError(f"{where}: parameter 'to_world': {e}") from None
     material = None
     emitter = None
     for ch in node.children:
@@ -582,7 +662,10 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
             default_material.append(len(materials) - 1)
         material = default_material[0]
     name = node.attrib.get("id", f"{kind}@{node.line}")
-    return ShapeDescription(name, v, f, material, emitter, where=where)
+    return ShapeDescription(
+        name, mesh.vertices, mesh.faces, material, emitter, where=where, normals=mesh.normals,
+        uvs=mesh.uvs,
+    )  # fmt: skip
 
 
 def _sensor(ctx: _Ctx, node: _Node):
@@ -800,7 +883,8 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
             if "id" in ch.attrib:
                 ctx.refs[ch.attrib["id"]] = (ch, idx)
         elif ch.tag == "shape":
-            shapes.append(media.bind(ch, _shape(ctx, ch, materials, default_material)))
+            for sh in _shape_list(ctx, ch, materials, default_material):
+                shapes.append(media.bind(ch, sh))
         elif ch.tag == "emitter":
             lights.append(_light(ctx, ch))
         elif ch.tag == "texture" and "id" in ch.attrib:  # used by <ref> (_textures_xml)
