@@ -4,7 +4,7 @@
 - `_fresnel`: Fresnel equations for dielectrics and conductors (eq. 3.13-3.18), Schlick;
 - `_ior`: spectral indices of refraction (Sellmeier glasses and water, tabulated Au/Ag/Cu/Al),
   the relative complex index of two absorbing media (footnote 18);
-- `_microfacet`: the Trowbridge-Reitz (GGX) distribution with visible-normal sampling;
+- `_microfacet`: the Trowbridge-Reitz (GGX) and Beckmann distributions with visible-normal sampling;
 - `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, diffuse
   transmission, retroreflection, smooth and rough conductor and dielectric, two-sided wrapper;
 - `_properties`: absorptance from eq. 3.2, the flux-weighted -ances of table 3.1, slab and
@@ -73,6 +73,7 @@ from ._ior import (
     sellmeier as sellmeier,
 )
 from ._microfacet import (
+    BeckmannDistribution as BeckmannDistribution,
     TrowbridgeReitzDistribution as TrowbridgeReitzDistribution,
     roughness_to_alpha as roughness_to_alpha,
 )

@@ -1,16 +1,18 @@
-r"""The Trowbridge-Reitz (GGX) microfacet distribution, with visible-normal sampling.
+r"""The Trowbridge-Reitz (GGX) and Beckmann microfacet distributions, with visible-normal sampling.
 
 All directions are in the local shading frame (normal +z) and point away from the surface.
 The roughness parameters $\alpha_x, \alpha_y$ broadcast against the leading axes of the
 directions (an array `alpha` of shape `(...)` goes with directions `(..., 3)`).
 
 ??? cite "References"
-    `Trowbridge1975`; `Walter2007` (GGX); `Heitz2014` (masking-shadowing);
-    `Heitz2018` (visible-normal sampling); `Pharr2023` section 9.6.
+    `Trowbridge1975`; `Walter2007` (GGX, Beckmann); `Heitz2014` (masking-shadowing);
+    `Heitz2018` (visible-normal sampling); `HeitzDEon2014` (visible normals of Beckmann);
+    `Pharr2016` section 8.4 (Beckmann sampling); `Pharr2023` section 9.6.
 """
 
 import equinox as eqx
 import jax.numpy as jnp
+import jax.scipy.special as jsp
 from jax import Array
 
 from .._checks import as_float_array
@@ -18,7 +20,7 @@ from .._math import align_ranks, safe_sqrt
 from ._directions import _inv_norm, _sqrt_clamped, _stack3
 from ._warps import _sample_disk_concentric
 
-__all__ = ["TrowbridgeReitzDistribution", "roughness_to_alpha"]
+__all__ = ["BeckmannDistribution", "TrowbridgeReitzDistribution", "roughness_to_alpha"]
 
 # Smallest alpha used in computations: below it D overflows in float32 (Mitsuba clamps to the
 # same value). Use the smooth BxDFs for mirror-like surfaces.
@@ -41,12 +43,12 @@ def roughness_to_alpha(roughness) -> Array:
     return safe_sqrt(r)
 
 
-def _check_alpha(alpha, name: str) -> Array:
+def _check_alpha(alpha, name: str, what: str = "GGX") -> Array:
     alpha = as_float_array(alpha, name)
     return eqx.error_if(
         alpha,
         (alpha <= 0) | (alpha > 1),
-        f"`{name}` (GGX roughness alpha) must lie in (0, 1]; got a value outside. "
+        f"`{name}` ({what} roughness alpha) must lie in (0, 1]; got a value outside. "
         "Use the smooth BxDF for alpha = 0.",
     )
 
@@ -217,3 +219,180 @@ class TrowbridgeReitzDistribution(eqx.Module):
         x, y, z, ax, ay = self._axy(w)
         x, y, z, ax, ay, u0, u1 = align_ranks(x, y, z, ax, ay, u[..., 0], u[..., 1])
         return _stack3(*_sample_wm_xyz(x, y, z, ax, ay, u0, u1))
+
+
+# --------------------------------------------------------------------------------------------
+# Beckmann
+
+_INV_SQRT_PI = 0.5641895835477563  # 1 / sqrt(pi)
+_NEWTON_STEPS = 10
+
+
+def _beckmann_sample11(cos_theta: Array, u0: Array, u1: Array) -> tuple[Array, Array]:
+    r"""Slopes $(x, y)$ of a visible normal of the unit-roughness Beckmann distribution, seen
+    from a direction at polar angle $\theta$ in the x-z plane (`HeitzDEon2014`, `Pharr2016`
+    8.4.3).
+
+    The x-marginal of the visible slopes has the CDF
+    $C(b) = (1 + b + \tan\theta\,e^{-\operatorname{erf}^{-1}(b)^2}/\sqrt\pi) /
+    (1 + \operatorname{erf}(\cot\theta) + \tan\theta\,e^{-\cot^2\theta}/\sqrt\pi)$
+    in $b = \operatorname{erf}(x)$, inverted by safeguarded Newton steps from a fitted start;
+    $y$ is an independent unit Gaussian slope divided by $\sqrt2$ (erfinv of a uniform).
+    """
+    dtype = cos_theta.dtype
+    eps = jnp.asarray(1e-6, dtype)
+    cos_theta = jnp.clip(cos_theta, 1e-6, 1.0)
+    sin_theta = _sqrt_clamped(1.0 - cos_theta * cos_theta)
+    tan_theta = sin_theta / cos_theta
+    cot_theta = cos_theta / jnp.maximum(sin_theta, 1e-7)
+    u0 = jnp.maximum(u0, eps)
+    # Newton-bisection on b = erf(slope_x) in the bracket [-1, erf(cot theta)].
+    lo = -jnp.ones_like(cos_theta)
+    hi = jsp.erf(cot_theta)
+    theta = jnp.arccos(cos_theta)
+    fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta))
+    b = hi - (1.0 + hi) * (1.0 - u0) ** fit
+    norm = 1.0 / (1.0 + hi + _INV_SQRT_PI * tan_theta * jnp.exp(-cot_theta * cot_theta))
+    one = jnp.asarray(1.0 - 1e-7 if dtype == jnp.float64 else 1.0 - 1e-6, dtype)
+    done = jnp.zeros(cos_theta.shape, bool)
+    for _ in range(_NEWTON_STEPS):  # a fixed number of vectorised steps, not a loop over data
+        b = jnp.where((b >= lo) & (b <= hi), b, 0.5 * (lo + hi))
+        inv = jsp.erfinv(jnp.clip(b, -one, one))
+        value = norm * (1.0 + b + _INV_SQRT_PI * tan_theta * jnp.exp(-inv * inv)) - u0
+        deriv = norm * (1.0 - inv * tan_theta)
+        done = done | (jnp.abs(value) < 1e-5)
+        lo = jnp.where(done | (value > 0), lo, b)
+        hi = jnp.where(~done & (value > 0), b, hi)
+        safe = jnp.where(jnp.abs(deriv) > 0, deriv, 1.0)
+        b = jnp.where(done, b, b - value / safe)
+    slope_x = jsp.erfinv(jnp.clip(b, -one, one))
+    slope_y = jsp.erfinv(jnp.clip(2.0 * jnp.maximum(u1, eps) - 1.0, -one, one))
+    # Near normal incidence the visible slopes are the plain Gaussian ones (polar form).
+    normal = cos_theta > 0.9999
+    r = jnp.sqrt(-jnp.log1p(-u0))
+    phi = 2.0 * jnp.pi * u1
+    slope_x = jnp.where(normal, r * jnp.cos(phi), slope_x)
+    slope_y = jnp.where(normal, r * jnp.sin(phi), slope_y)
+    return slope_x, slope_y
+
+
+class BeckmannDistribution(eqx.Module):
+    r"""Anisotropic Beckmann distribution of microfacet normals (`Walter2007`), with the same
+    interface as `TrowbridgeReitzDistribution` (Mitsuba's default for rough BSDFs).
+
+    $$D(\omega_m) = \frac{\exp\!\left(-\frac{m_x^2/\alpha_x^2 + m_y^2/\alpha_y^2}{m_z^2}\right)}
+      {\pi\alpha_x\alpha_y m_z^4}$$
+
+    normalised so that $\int D(\omega_m)\cos\theta_m\,d\omega_m = 1$ over the upper
+    hemisphere (zero on the lower one, where $m_z \le 0$). Smith's masking uses the exact
+    $\Lambda(\omega) = \tfrac12\left(\operatorname{erf}(a) - 1 + e^{-a^2}/(a\sqrt\pi)\right)$,
+    $a = |\cos\theta| / \sqrt{\alpha_x^2\omega_x^2 + \alpha_y^2\omega_y^2}$ (`Heitz2014`).
+
+    **Fields:**
+
+    - `alpha_x`, `alpha_y`: roughness (RMS slope times $\sqrt2$) along the tangent axes, in
+        (0, 1] (values below 1e-4 are raised to 1e-4, as in Mitsuba). Shape `(...)`,
+        broadcast against directions. [dimensionless]
+
+    !!! note "Thesis"
+        Glossy reflection, section 3.1 (the thesis names the lobe types; the microfacet model
+        fills them in following `Pharr2016` section 8.4 and `Walter2007`).
+
+    ??? cite "References"
+        `Beckmann1963`; `Walter2007`; `Heitz2014`; `HeitzDEon2014`; `Pharr2016` §8.4.
+    """
+
+    alpha_x: Array
+    alpha_y: Array
+
+    def __init__(self, alpha_x, alpha_y=None):
+        ax = _check_alpha(alpha_x, "alpha_x", "Beckmann")
+        ay = ax if alpha_y is None else _check_alpha(alpha_y, "alpha_y", "Beckmann")
+        self.alpha_x = jnp.maximum(ax, ALPHA_MIN)
+        self.alpha_y = jnp.maximum(ay, ALPHA_MIN)
+
+    def _axy(self, w: Array) -> tuple[Array, Array, Array, Array, Array]:
+        return align_ranks(w[..., 0], w[..., 1], w[..., 2], self.alpha_x, self.alpha_y)
+
+    def D(self, wm) -> Array:
+        """Microfacet normal density $D(\\omega_m)$, 0 for $m_z \\le 0$. [sr^-1]"""
+        x, y, z, ax, ay = self._axy(as_float_array(wm, "wm"))
+        ok = z > 0
+        z2 = jnp.where(ok, z * z, 1.0)
+        e = ((x / ax) ** 2 + (y / ay) ** 2) / z2
+        return jnp.where(ok, jnp.exp(-e) / (jnp.pi * ax * ay * z2 * z2), 0.0)
+
+    def lambda_(self, w) -> Array:
+        r"""Smith's $\Lambda(\omega)$ (exact form above); 0 at normal incidence, inf at grazing."""
+        x, y, z, ax, ay = self._axy(as_float_array(w, "w"))
+        s = jnp.sqrt((ax * x) ** 2 + (ay * y) ** 2)  # alpha tan(theta) |cos theta|
+        az = jnp.abs(z)
+        normal = s <= 1e-12 * az
+        grazing = az <= 0
+        a = az / jnp.where(normal | grazing, 1.0, s)
+        lam = 0.5 * (jsp.erf(a) - 1.0 + jnp.exp(-a * a) * _INV_SQRT_PI / a)
+        lam = jnp.maximum(lam, 0.0)
+        return jnp.where(normal, 0.0, jnp.where(grazing, jnp.inf, lam))
+
+    def G1(self, w) -> Array:
+        r"""Smith masking $G_1(\omega) = 1/(1 + \Lambda(\omega))$, in [0, 1]; 0 at grazing."""
+        return 1.0 / (1.0 + self.lambda_(w))
+
+    def G(self, wo, wi) -> Array:
+        r"""Height-correlated masking-shadowing $1/(1 + \Lambda(\omega_o) + \Lambda(\omega_i))$
+        (`Heitz2014`)."""
+        lo, li = align_ranks(self.lambda_(wo), self.lambda_(wi))
+        return 1.0 / (1.0 + lo + li)
+
+    def D_visible(self, w, wm) -> Array:
+        r"""Distribution of visible normals $D_\omega(\omega_m) = \frac{G_1(\omega)}{|\cos\theta|}
+        D(\omega_m)\max(0, \omega\cdot\omega_m)$ for `w` mirrored to the upper hemisphere
+        (`HeitzDEon2014`). [sr^-1]"""
+        w = as_float_array(w, "w")
+        wm = as_float_array(wm, "wm")
+        w, wm = align_ranks(w, wm)
+        w = jnp.where(w[..., 2:3] < 0, -w, w)
+        z = w[..., 2]
+        ok = z > 0
+        dot = jnp.maximum(jnp.sum(w * wm, axis=-1), 0.0)
+        g1 = self.G1(w)
+        return jnp.where(ok, g1 * self.D(wm) * dot / jnp.where(ok, z, 1.0), 0.0)
+
+    def pdf(self, w, wm) -> Array:
+        """Solid-angle density of `sample_wm(w, u)` at `wm`: `D_visible`. [sr^-1]"""
+        return self.D_visible(w, wm)
+
+    def sample_wm(self, w, u) -> Array:
+        r"""Sample a visible microfacet normal for `w` (`HeitzDEon2014`; `Pharr2016` 8.4.3).
+
+        Stretch `w` to the unit-roughness configuration, sample the slopes visible from it
+        (`_beckmann_sample11`), rotate them to the azimuth of the stretched `w`, unstretch
+        them, and return the normal $(-x, -y, 1)/\|\cdot\|$.
+
+        **Arguments:**
+
+        - `w`: direction `(..., 3)` in the local frame; either hemisphere (it is mirrored to +z).
+        - `u`: uniform variates `(..., 2)` in [0, 1).
+
+        **Returns:**
+
+        Microfacet normals `(..., 3)` with $m_z > 0$, distributed with density `pdf(w, wm)`.
+        """
+        w = as_float_array(w, "w")
+        u = as_float_array(u, "u")
+        x, y, z, ax, ay = self._axy(w)
+        x, y, z, ax, ay, u0, u1 = align_ranks(x, y, z, ax, ay, u[..., 0], u[..., 1])
+        sign = jnp.where(z < 0, -1.0, 1.0)
+        hx, hy, hz = ax * x * sign, ay * y * sign, z * sign
+        inv, _ = _inv_norm(hx, hy, hz)
+        hx, hy, hz = hx * inv, hy * inv, hz * inv
+        sx, sy = _beckmann_sample11(hz, u0, u1)
+        rho2 = hx * hx + hy * hy
+        pole = rho2 < 1e-14
+        irho = 1.0 / jnp.sqrt(jnp.where(pole, 1.0, rho2))
+        cphi = jnp.where(pole, 1.0, hx * irho)
+        sphi = jnp.where(pole, 0.0, hy * irho)
+        sx, sy = cphi * sx - sphi * sy, sphi * sx + cphi * sy
+        mx, my, mz = -ax * sx, -ay * sy, jnp.ones_like(sx)
+        inv, _ = _inv_norm(mx, my, mz)
+        return _stack3(mx * inv, my * inv, mz * inv)
