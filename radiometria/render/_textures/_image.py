@@ -88,7 +88,7 @@ def read_texture_image(path, *, raw: bool = False) -> np.ndarray:
 def _read_pillow(path: Path, raw: bool) -> np.ndarray:
     try:
         with warnings.catch_warnings():
-            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            warnings.simplefilter("error")  # Pillow's warnings on odd files become errors
             with Image.open(path) as im:  # reads the header only
                 w, h = im.size
                 if w < 1 or h < 1 or w * h > MAX_TEXELS:
@@ -106,6 +106,8 @@ def _read_pillow(path: Path, raw: bool) -> np.ndarray:
         raise
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as e:
         raise TextureFileError(f"{path}: image too large ({e}).") from None
+    except Warning as e:
+        raise TextureFileError(f"{path}: not a readable image ({type(e).__name__}: {e}).") from None
     except (OSError, ValueError, SyntaxError, EOFError) as e:  # Pillow's corrupt-file errors
         raise TextureFileError(f"{path}: not a readable image ({e}).") from None
     if mode in ("1", "L", "LA", "RGB", "RGBA", "RGBX"):
