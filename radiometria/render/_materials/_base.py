@@ -16,13 +16,13 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import AbstractBxDF, BSDFSample
 from .._spectral import SpectralValue
-from .._textures import AbstractTexture, concatenate_textures
+from .._textures import AbstractTexture, TextureSpec, concatenate_textures
 
 __all__ = ["AbstractMaterial", "Properties"]
 
-Properties = dict[str, "SpectralValue | str | bool | int"]
+Properties = dict[str, "SpectralValue | TextureSpec | str | bool | int"]
 """A plugin's parameters as a scene file gives them: name -> number, string, `LinearRGB`
-triple or spectrum (Mitsuba 3's `Properties`)."""
+triple, spectrum or texture (Mitsuba 3's `Properties`)."""
 
 
 class AbstractMaterial(eqx.Module):
