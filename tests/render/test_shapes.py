@@ -14,7 +14,7 @@ from radiometria.render._scenes._shapes import SPHERE_MAX_RADIAL_ERROR, sphere
 
 from ._mitsuba import mitsuba, z_test_against_mitsuba
 
-SIZE = 24
+SIZE = 16
 
 
 def _xml(body: str, *, depth: int = 6, origin="0, 0.6, 4.2", size: int = SIZE) -> str:
@@ -194,7 +194,7 @@ def test_shapes_pass_mitsubas_pixel_z_test(tmp_path, name):
     body = _meshes_body(tmp_path) if name == "meshes" else SCENES[name]
     path = tmp_path / "scene.xml"
     path.write_text(_xml(body))
-    res = z_test_against_mitsuba(path, spp=64, ref_spp=1024)
+    res = z_test_against_mitsuba(path, spp=64, ref_spp=512)
     assert res.passed, res.message
 
 
