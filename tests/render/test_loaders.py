@@ -185,7 +185,7 @@ def _write(tmp_path, body: str):
     "body, match",
     [
         ('<scene>\n  <shape type="rectangle">\n    <texture type="bitmap"/>\n  </shape>\n</scene>',
-         r"bad.xml:3: <texture>: textures are not supported"),
+         r"bad.xml:3: <texture>: missing attribute 'name'"),
         ('<scene>\n\n  <emitter type="projector"/>\n</scene>', r"bad.xml:3: .*unsupported emitter \(outside a <shape>\) type 'projector'"),  # noqa: E501
         ('<scene>\n  <volume/>\n</scene>', r"bad.xml:2: .*unsupported tag <volume>"),
         ('<scene>\n  <bsdf type="plastic"/>\n</scene>', r"bad.xml:2: .*unsupported BSDF type 'plastic'"),  # noqa: E501
