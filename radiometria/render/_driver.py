@@ -427,7 +427,8 @@ def render(
     with _Interrupts() as interrupts:
         for i in steps:
             group, tile = divmod(i, plan.n_tiles)
-            pixel = jnp.arange(plan.tile, dtype=jnp.int32) + np.int32(tile * plan.tile)
+            # Host indices: no device program per step to make them.
+            pixel = np.arange(plan.tile, dtype=np.int32) + np.int32(tile * plan.tile)
             # No host callbacks in the step: it stays cacheable on disk (`_cache.py`).
             with checks_without_callbacks():
                 film = _step(
