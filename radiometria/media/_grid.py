@@ -26,8 +26,11 @@ exactly the weight convention of `HomogeneousMedium` ($E[w_j 1_{event} f(t)] =
 \int_0^{t_{max}} \sigma_{s,j}T_j f\,\mathrm dt$, $E[w_j 1_{no\ event}] = T_j(t_{max})$), and
 for a grey medium it is delta tracking with the weight $\varrho$ at an event and 1 otherwise.
 
-**Transmittance** is estimated by ratio tracking with the same majorant,
-$\hat T_j = \prod_i (1 - \sigma_{t,j}(\mathbf x_i)/\bar\mu)$ (`Novak2014`).
+**Transmittance** is estimated by residual ratio tracking about the control extinction
+$\sigma_{c,j} = \min d\cdot s_j$ on the part $L$ of the segment inside the box, with rate
+$\bar\mu_r = (\max d - \min d)\max_j s_j$:
+$\hat T_j = e^{-\sigma_{c,j}L}\prod_i (1 - (\sigma_{t,j}(\mathbf x_i) - \sigma_{c,j})/\bar\mu_r)$
+(`Novak2014`); a constant grid gets the exact transmittance, as a homogeneous medium does.
 
 **Variates.** The interface hands one variate per path (`u[:, 0]`, with `u[:, 1]` mixed in
 where given); the tracking steps draw theirs from the hash `pcg4d` of those variates and the
@@ -146,6 +149,7 @@ class GridMedium(AbstractMedium):
     - `max_density`: $\max d$ if already known (default: computed). [1]
     - `to_local`: the inverse of `to_world`, given instead of it (keyword-only). [1/scene
         units]
+    - `min_density`: $\min d$ if already known (keyword-only; default: computed). [1]
 
     Concrete arguments are checked (`ValueError` naming the argument); traced ones are not.
 
@@ -170,6 +174,7 @@ class GridMedium(AbstractMedium):
     to_local: Float[Array, "4 4"]
     albedo_grid: Float[Array, "z2 y2 x2"] | None
     max_density: Float[Array, ""]
+    min_density: Float[Array, ""]
 
     def __init__(
         self,
@@ -182,6 +187,7 @@ class GridMedium(AbstractMedium):
         max_density=None,
         *,
         to_local=None,
+        min_density=None,
     ):
         if not isinstance(phase, AbstractPhaseFunction):
             raise TypeError(
@@ -215,6 +221,7 @@ class GridMedium(AbstractMedium):
         self.to_local = to_local
         self.albedo_grid = albedo_grid
         self.max_density = jnp.max(density) if max_density is None else jnp.asarray(max_density)
+        self.min_density = jnp.min(density) if min_density is None else jnp.asarray(min_density)
 
     def _spectra(self, wavelength_nm):
         lam = as_float_array(wavelength_nm, "wavelength_nm")
@@ -254,9 +261,12 @@ class GridMedium(AbstractMedium):
         d = jnp.asarray(t_max, dtype)
         start = jnp.maximum(t0, 0.0)
         stop = jnp.minimum(t1, d)
-        mu = self.majorant(lam).astype(dtype)
         s, _ = self._spectra(lam)
-        s_mean = jnp.mean(s, axis=-1)
+        mu = self.majorant(lam).astype(dtype)
+        sc = jnp.zeros_like(s)
+        if mode == "ratio":  # residual ratio tracking about the control min(d) s_j
+            sc = self.min_density.astype(dtype) * s
+            mu = (self.max_density - self.min_density).astype(dtype) * jnp.max(s, axis=-1)
         active0 = (stop > start) & (mu > 0)
 
         def cond(c):
@@ -271,7 +281,7 @@ class GridMedium(AbstractMedium):
             x = origins + jnp.where(hit, t_new, 0.0)[:, None] * directions
             st, ss = self.coefficients_at(x, lam)
             if mode == "ratio":
-                factor = 1.0 - st / jnp.where(mu > 0, mu, 1.0)[:, None]
+                factor = 1.0 - (st - sc) / jnp.where(mu > 0, mu, 1.0)[:, None]
                 weight = jnp.where(hit[:, None], weight * factor, weight)
                 new_active = hit
             else:
@@ -294,7 +304,8 @@ class GridMedium(AbstractMedium):
             jnp.ones((n, k), dtype),
         )
         _, t, _, scattered, weight = lax.while_loop(cond, body, init)
-        del s_mean
+        if mode == "ratio":
+            weight = weight * jnp.exp(-sc * jnp.maximum(stop - start, 0.0)[:, None])
         return t, scattered, weight, d
 
     def transmittance(
@@ -305,7 +316,7 @@ class GridMedium(AbstractMedium):
         wavelength_nm: Float[Array, "n k"],
         u: Float[Array, "n d"],
     ) -> Float[Array, "n k"]:
-        """Ratio-tracking estimate of the transmittance of each segment `(0, t_max)` [scene
+        """Residual-ratio-tracking estimate of the transmittance of each segment `(0, t_max)` [scene
         units] `(n, k)`, unbiased at every wavelength [nm]; variates from `u` (module
         docstring). [1]"""
         _, _, weight, _ = self._walk(origins, directions, t_max, wavelength_nm, u, "ratio")

@@ -10,8 +10,10 @@ from ..camera import (
     GaussianFilter,
     LanczosFilter,
     MitchellFilter,
+    OrthographicCamera,
     PinholeCamera,
     TentFilter,
+    ThinLensCamera,
 )
 from ._accelerators import ACCELERATORS
 from ._integrators import Direct, Path, VolPath
@@ -32,7 +34,7 @@ from ._materials import (
     RoughDielectric,
 )
 from ._materials._null import Null
-from ._media import HomogeneousMediumPlugin
+from ._media import GridMediumPlugin, HomogeneousMediumPlugin
 from ._samplers import Independent, OwenSobol
 from ._textures import ConstantTexture
 
@@ -64,13 +66,17 @@ LIGHTS = _by_name(
 # Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
 INTEGRATORS = _by_name(Path, Direct, VolPath)
 # Mitsuba 3's `<medium type=...>` names.
-MEDIA = _by_name(HomogeneousMediumPlugin)
+MEDIA = _by_name(HomogeneousMediumPlugin, GridMediumPlugin)
 # `radiometria render --sampler`.
 SAMPLERS = _by_name(Independent, OwenSobol)
 # Spectral values of scene files are constant textures until textures arrive (scene format).
 TEXTURES = {"constant": ConstantTexture}
 # Mitsuba 3's `<sensor type=...>` names.
-CAMERAS = {"perspective": PinholeCamera}
+CAMERAS = {
+    "perspective": PinholeCamera,
+    "thinlens": ThinLensCamera,
+    "orthographic": OrthographicCamera,
+}
 # Mitsuba 3's `<rfilter type=...>` names (`catmullrom` is Mitchell-Netravali with B=0, C=1/2).
 FILTERS = {
     "box": BoxFilter,

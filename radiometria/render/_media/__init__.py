@@ -7,5 +7,6 @@ material plugin) and builds a `radiometria.media.AbstractMedium` for each path's
 """
 
 from ._base import AbstractMediumPlugin as AbstractMediumPlugin
+from ._grid import GridMediumPlugin as GridMediumPlugin
 from ._homogeneous import HomogeneousMediumPlugin as HomogeneousMediumPlugin
 from ._set import KEEP_MEDIUM as KEEP_MEDIUM, VACUUM as VACUUM, MediumSet as MediumSet

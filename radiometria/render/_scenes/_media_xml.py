@@ -9,8 +9,9 @@ loader sees it, and records where each one is bound:
   or `<phase type="hg">` with `g` in (-1, 1); `sample_emitters` is accepted (next-event
   estimation always runs);
 - `<medium type="heterogeneous">` with `<volume name="sigma_t" type="gridvolume">` (a Mitsuba
-  `.vol` `filename`, optional `to_world`) or `type="constvolume"` (`value`), an `albedo`
-  volume or spectral value, `scale` and a phase function;
+  `.vol` `filename`, read here by `_volume_files.read_vol`, optional `to_world`) or
+  `type="constvolume"` (`value`), an `albedo` volume or spectral value, `scale` and a phase
+  function;
 - at the top level (referable by `id`), inside a `<shape>` as `name="interior"` or
   `name="exterior"` (or a `<ref name="interior" id=...>`), and inside the `<sensor>` (the
   camera's medium).
@@ -29,6 +30,7 @@ import numpy as np
 from ...radiometry import PiecewiseLinearSpectrum
 from .._spectral import LinearRGB
 from ._description import MediumDescription, SceneError, ShapeDescription
+from ._volume_files import read_vol
 
 __all__ = ["MediaBinding", "extract_media"]
 
@@ -101,7 +103,9 @@ def _volume(ctx, node, properties, transform) -> dict:
             raise ctx.err(node, "a gridvolume needs a 'filename'")
         path = Path(props["filename"])
         path = path if path.is_absolute() else ctx.base / path
-        out = {"type": kind, "filename": str(path), "where": f"{ctx.file}:{node.line}"}
+        where = f"{ctx.file}:{node.line}"
+        out = {"type": kind, "filename": str(path), "where": where}
+        out["data"] = read_vol(path, where=where)
         if "to_world" in props:
             out["to_world"] = props["to_world"]
         if props.get("filter_type", "trilinear") != "trilinear":

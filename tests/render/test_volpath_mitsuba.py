@@ -1,0 +1,114 @@
+"""volpath with grid media against Mitsuba 3 `scalar_spectral` `volpath`: Mitsuba's per-pixel
+z-test (`radiometria.montecarlo.pixel_z_test` on Mitsuba `moment` references, helpers in
+`_mitsuba.py`) on 16x16 scenes: a cube with a `null` boundary holding a medium, lit by a large
+area light behind it. Our `.vol` files are written by `write_vol` and read by both renderers.
+
+- A heterogeneous medium of constant density must render what Mitsuba's *homogeneous* medium
+  renders (Mitsuba's own heterogeneous medium has an open bug here, so the reference is its
+  homogeneous one).
+- A varying (ramp) grid against Mitsuba's `heterogeneous` medium reading the same file; the
+  same with an RGB (spectrally varying) extinction is a strict xfail: it does not match yet.
+"""
+
+import numpy as np
+import pytest
+
+from radiometria.montecarlo import pixel_z_test
+from radiometria.render import render
+from radiometria.render._scenes._volume_files import write_vol
+
+from ._mitsuba import mitsuba_moments
+
+pytest.importorskip("mitsuba")
+
+SPP = 64
+REF_SPP = 512
+
+SCENE = """<scene version="3.0.0">
+  {medium}
+  <sensor type="perspective"><float name="fov" value="22"/>
+    <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/>
+    </transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <integrator type="volpath"><integer name="max_depth" value="8"/></integrator>
+  <shape type="cube"><bsdf type="null"/><ref name="interior" id="m"/></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="8"/><translate z="-3"/>
+    </transform><emitter type="area"><rgb name="radiance" value="1, 1, 1"/></emitter></shape>
+</scene>
+"""
+
+HOMOGENEOUS = (
+    '<medium type="homogeneous" id="m"><float name="sigma_t" value="0.5"/>'
+    '<rgb name="albedo" value="0.9, 0.6, 0.3"/></medium>'
+)
+GRID = (
+    '<medium type="heterogeneous" id="m"><volume name="sigma_t" type="gridvolume">'
+    '<string name="filename" value="{file}"/><transform name="to_world"><scale value="2"/>'
+    '<translate value="-1, -1, -1"/></transform></volume><float name="scale" value="{scale}"/>'
+    '<rgb name="albedo" value="0.9, 0.6, 0.3"/></medium>'
+)
+
+
+def _ramp(channels: int) -> np.ndarray:
+    """A density rising along x and falling along y, (Z, Y, X, C), in RGB of one
+    chromaticity (red twice as dense as blue) when C = 3."""
+    z, y, x = np.meshgrid(*[(np.arange(n) + 0.5) / n for n in (3, 5, 6)], indexing="ij")
+    d = 0.2 + 2.0 * x * (1.2 - y) + 0.0 * z
+    return d[..., None] * (np.array([1.0, 0.7, 0.5]) if channels == 3 else 1.0)
+
+
+def _files(tmp_path, case: str):
+    ours = tmp_path / "ours.xml"
+    ref = tmp_path / "ref.xml"
+    vol = tmp_path / "sigma_t.vol"
+    if case == "constant grid":
+        write_vol(vol, np.ones((4, 4, 4)))
+        ours.write_text(SCENE.format(medium=GRID.format(file=vol, scale=0.5)))
+        ref.write_text(SCENE.format(medium=HOMOGENEOUS))
+    else:
+        write_vol(vol, _ramp(3 if case == "rgb ramp grid" else 1))
+        ours.write_text(SCENE.format(medium=GRID.format(file=vol, scale=0.4)))
+        ref = ours
+    return ours, ref
+
+
+def _z_test(ours, ref):
+    mean, var = mitsuba_moments(ref, REF_SPP, seed=1)
+    img = np.asarray(render(ours, spp=SPP, seed=0, return_xyz=True, progress=False))
+    img = img.astype(np.float64)
+    # The image mean per channel: pixels are independent, so its standard error pools the
+    # per-pixel variances (a far stronger test of a global bias than the per-pixel one).
+    n = mean.shape[0] * mean.shape[1]
+    se = np.sqrt(var.sum(axis=(0, 1)) / n**2 * (1 / SPP + 1 / REF_SPP))
+    mean_ok = bool(np.all(np.abs((img - mean).mean(axis=(0, 1))) < 4 * se))
+    return pixel_z_test(img, mean, var, SPP, REF_SPP), mean_ok
+
+
+RGB_XFAIL = pytest.mark.xfail(
+    strict=True,
+    reason="an RGB sigma_t grid renders about 2x brighter than Mitsuba's, whose spectral "
+    "gridvolume does not upsample the interpolated RGB as one unbounded spectrum times the "
+    "density as our plugin assumes; not resolved yet (issue 13)",
+)
+
+
+@pytest.mark.parametrize(
+    "case", ["constant grid", "ramp grid", pytest.param("rgb ramp grid", marks=RGB_XFAIL)]
+)
+def test_grid_media_pass_the_pixel_z_test_against_mitsuba(tmp_path, case):
+    ours, ref = _files(tmp_path, case)
+    result, mean_ok = _z_test(ours, ref)
+    assert result.passed, result.message
+    assert mean_ok
+
+
+def test_a_twenty_percent_denser_grid_fails_the_z_test(tmp_path):
+    """The test can fail (its image-mean part; the per-pixel z-test at 64 spp cannot see a
+    20 % change in this noisy scene): scale 0.6 against Mitsuba's homogeneous sigma_t 0.5."""
+    ours, ref = _files(tmp_path, "constant grid")
+    ours.write_text(ours.read_text().replace('value="0.5"', 'value="0.6"'))
+    _, mean_ok = _z_test(ours, ref)
+    assert not mean_ok
