@@ -100,3 +100,57 @@ def test_media_scene_renders_through_the_driver(tmp_path):
     variates): a finite, non-black image."""
     img = np.asarray(render(load_mitsuba_xml(_write(tmp_path)), spp=4, seed=0))
     assert img.shape == (8, 8, 3) and np.all(np.isfinite(img)) and img.max() > 0
+
+
+def test_vol_files_written_by_mitsuba_are_read_in_its_layout(tmp_path):
+    """Mitsuba 3's own VolumeGrid.write (x fastest, channels interleaved) is read back."""
+    mi = pytest.importorskip("mitsuba")
+    from radiometria.render._scenes._volume_files import read_vol
+
+    mi.set_variant("scalar_spectral")
+    data = np.random.default_rng(1).random((3, 4, 5, 3)).astype(np.float32)
+    mi.VolumeGrid(data).write(str(tmp_path / "m.vol"))
+    np.testing.assert_array_equal(read_vol(tmp_path / "m.vol"), data)
+
+
+def _vol_bytes(tmp_path, mutate):
+    import struct
+
+    from radiometria.render._scenes._volume_files import write_vol
+
+    path = tmp_path / "bad.vol"
+    write_vol(path, np.ones((2, 2, 2)))
+    b = bytearray(path.read_bytes())
+    mutate(b, struct)
+    path.write_bytes(bytes(b))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message"),
+    [
+        (lambda b, s: b.__setitem__(slice(0, 3), b"VOX"), "magic"),
+        (lambda b, s: b.__setitem__(3, 2), "version 2"),
+        (lambda b, s: b.__setitem__(slice(4, 8), s.pack("<i", 2)), "encoding 2"),
+        (lambda b, s: b.__setitem__(slice(20, 24), s.pack("<i", 2)), "channel count 2"),
+        (lambda b, s: b.__setitem__(slice(8, 12), s.pack("<i", 0)), r"xres = 0 outside"),
+        (lambda b, s: b.__setitem__(slice(16, 20), s.pack("<i", 2**30)), "zres = 1073741824"),
+        (lambda b, s: b.__setitem__(slice(8, 12), s.pack("<i", 3)), "the file has 80 bytes"),
+        (lambda b, s: b.__delitem__(slice(60, None)), "the file has 60 bytes"),
+        (lambda b, s: b.__delitem__(slice(20, None)), "truncated header"),
+        (lambda b, s: b.__setitem__(slice(52, 56), s.pack("<f", float("nan"))), "nan"),
+        (lambda b, s: b.__setitem__(slice(52, 56), s.pack("<f", -1.0)), r"-1\.0"),
+    ],
+)
+def test_hostile_vol_files_are_scene_errors_naming_the_file(tmp_path, mutate, message):
+    """Each bad .vol, referenced from a scene, is a SceneError naming the scene line, the
+    file and the problem (sizes are checked before anything is allocated)."""
+    vol = _vol_bytes(tmp_path, mutate)
+    scene = tmp_path / "grid.xml"
+    scene.write_text(
+        '<scene version="3.0.0">\n<medium type="heterogeneous" id="m">\n'
+        '<volume name="sigma_t" type="gridvolume">'
+        f'<string name="filename" value="{vol.name}"/></volume></medium>\n</scene>\n'
+    )
+    with pytest.raises(SceneError, match=rf"grid\.xml:3: volume file .*bad\.vol.*{message}"):
+        load_mitsuba_xml(scene)
