@@ -61,6 +61,7 @@ from .._math import safe_div
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz, coordinate_system
 from ._fresnel import _check_eta, _check_k, _fr_conductor, _fr_dielectric_snell
 from ._microfacet import (
+    BeckmannDistribution,
     TrowbridgeReitzDistribution,
     _D_den,
     _sample_wm_xyz,
@@ -806,21 +807,67 @@ class DielectricBxDF(AbstractBxDF):
 
 
 # --------------------------------------------------------------------------------------------
-# Rough conductor (GGX)
+# Rough conductor
 
 
 def _check_masking(masking: str) -> str:
     return check_choice(masking, "masking", ("height_correlated", "separable"))
 
 
+_DISTRIBUTIONS = {"ggx": TrowbridgeReitzDistribution, "beckmann": BeckmannDistribution}
+
+
+def _make_distribution(distribution: str, alpha_x, alpha_y):
+    """The microfacet distribution named `distribution` ("ggx" or "beckmann")."""
+    if not isinstance(distribution, str):
+        raise TypeError(
+            f"`distribution` must be a name ('ggx' or 'beckmann'), got {type(distribution)}."
+        )
+    name = check_choice(distribution, "distribution", tuple(_DISTRIBUTIONS))
+    return _DISTRIBUTIONS[name](alpha_x, alpha_y)
+
+
+def _is_ggx(distribution) -> bool:
+    """GGX has closed forms in which the cosines cancel (the fast path of the rough BxDFs)."""
+    return isinstance(distribution, TrowbridgeReitzDistribution)
+
+
+def _at(distribution, ax: Array, ay: Array):
+    """`distribution` with its roughness replaced by the batch-broadcast `ax`, `ay` (already
+    validated at construction, so not checked again)."""
+    return eqx.tree_at(lambda d: (d.alpha_x, d.alpha_y), distribution, (ax, ay))
+
+
+def _generic_terms(distribution, o, i, m, ax, ay, masking: str):
+    r"""(D(m), Lambda(wo), G) of any distribution, vectors as (x, y, z); G is the
+    height-correlated $1/(1 + \Lambda_o + \Lambda_i)$ or the separable $G_1G_1$."""
+    d = _at(distribution, ax, ay)
+    D = d.D(_stack3(*m))
+    lo, li = d.lambda_(_stack3(*o)), d.lambda_(_stack3(*i))
+    if masking == "height_correlated":
+        G = 1.0 / (1.0 + lo + li)
+    else:
+        G = 1.0 / ((1.0 + lo) * (1.0 + li))
+    return D, lo, G
+
+
+def _sample_m(distribution, o, ax, ay, u0, u1) -> tuple[Array, Array, Array]:
+    """A visible microfacet normal for `o` = (x, y, z), as (x, y, z)."""
+    if _is_ggx(distribution):
+        return _sample_wm_xyz(*o, ax, ay, u0, u1)
+    m = _at(distribution, ax, ay).sample_wm(_stack3(*o), jnp.stack([u0, u1], axis=-1))
+    return _xyz(m)
+
+
 class RoughConductorBxDF(AbstractBxDF):
-    r"""Rough conductor: Torrance-Sparrow microfacet BRDF, Trowbridge-Reitz (GGX) distribution.
+    r"""Rough conductor: Torrance-Sparrow microfacet BRDF, GGX or Beckmann distribution.
 
     $$f(\omega_o, \omega_i) = \frac{D(\omega_h)\,F_r(|\omega_o\cdot\omega_h|)\,
       G(\omega_o, \omega_i)}{4\,|\cos\theta_o|\,|\cos\theta_i|},\qquad
       \omega_h = \frac{\omega_o + \omega_i}{\|\omega_o + \omega_i\|}$$
 
-    $F_r$ is the conductor Fresnel term (thesis eq. 3.13-3.18), $D$ the GGX distribution and
+    $F_r$ is the conductor Fresnel term (thesis eq. 3.13-3.18), $D$ the microfacet distribution
+    (`TrowbridgeReitzDistribution`, "ggx", or `BeckmannDistribution`, "beckmann") and
     $G$ Smith's masking-shadowing: height-correlated (`masking="height_correlated"`, pbrt-v4,
     `Heitz2014`) or separable $G_1G_1$ (`masking="separable"`, Mitsuba 3). Sampled with the
     distribution of visible normals (`Heitz2018`):
@@ -831,10 +878,12 @@ class RoughConductorBxDF(AbstractBxDF):
 
     **Fields:**
 
-    - `alpha_x`, `alpha_y`: GGX roughness in (0, 1], `(...)` (`alpha_y` defaults to `alpha_x`).
+    - `alpha_x`, `alpha_y`: roughness in (0, 1], `(...)` (`alpha_y` defaults to `alpha_x`).
         [dimensionless]
     - `eta`, `k`: relative complex index of refraction, `(..., n_lambda)`. [dimensionless]
     - `masking`: `"height_correlated"` (default) or `"separable"`.
+    - `distribution`: `"ggx"` (default) or `"beckmann"` (Mitsuba 3's default); stored as the
+        distribution object in the field `distribution`.
 
     !!! note "Thesis"
         Section 3.1 ("Glossy Specular Reflection"), eq. (3.4), (3.13)-(3.18).
@@ -843,13 +892,22 @@ class RoughConductorBxDF(AbstractBxDF):
         `Torrance1967`; `Walter2007`; `Heitz2014`; `Heitz2018`; `Pharr2023` section 9.6.
     """
 
-    distribution: TrowbridgeReitzDistribution
+    distribution: TrowbridgeReitzDistribution | BeckmannDistribution
     eta: Array
     k: Array
     masking: str = eqx.field(static=True)
 
-    def __init__(self, alpha_x, eta, k, alpha_y=None, *, masking: str = "height_correlated"):
-        self.distribution = TrowbridgeReitzDistribution(alpha_x, alpha_y)
+    def __init__(
+        self,
+        alpha_x,
+        eta,
+        k,
+        alpha_y=None,
+        *,
+        masking: str = "height_correlated",
+        distribution: str = "ggx",
+    ):
+        self.distribution = _make_distribution(distribution, alpha_x, alpha_y)
         eta = _check_eta(_spectral(eta, "eta"))
         k = _check_k(_spectral(k, "k"))
         self.eta, self.k = _spectral_pair(eta, k)
@@ -870,10 +928,16 @@ class RoughConductorBxDF(AbstractBxDF):
         """
         (ox, oy, oz), (ix, iy, iz), (mx, my, mz) = o, i, m
         aoz, aiz = jnp.abs(oz), jnp.abs(iz)
+        ok_p = ok & (dot > 0)
+        if not _is_ggx(self.distribution):
+            # Any distribution: v = D G / (4 |z_o z_i|), p = D G_1(wo) / (4 |z_o|).
+            D, lo, G = _generic_terms(self.distribution, o, i, m, ax, ay, self.masking)
+            v = jnp.where(ok, D * G / jnp.where(ok, 4.0 * aoz * aiz, 1.0), 0.0)
+            p = jnp.where(ok_p, D / jnp.where(ok_p, 4.0 * aoz * (1.0 + lo), 1.0), 0.0)
+            return v, p
         ro, ri = _slope_root(ox, oy, oz, ax, ay), _slope_root(ix, iy, iz, ax, ay)
         go = aoz + ro
         d_inv = _D_den(mx, my, mz, ax, ay)
-        ok_p = ok & (dot > 0)
         # Each result ends in its division (0 = 1/inf where masked), so XLA's CPU backend
         # computes it once instead of in every wavelength of the consumer.
         if self.masking == "height_correlated":
@@ -919,7 +983,7 @@ class RoughConductorBxDF(AbstractBxDF):
         u2 = _u2(u2)
         _, (wo, _u, u2, ax, ay, eta, k) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
         o = ox, oy, oz = _xyz(wo)
-        m = mx, my, mz = _sample_wm_xyz(ox, oy, oz, ax, ay, u2[..., 0], u2[..., 1])
+        m = mx, my, mz = _sample_m(self.distribution, o, ax, ay, u2[..., 0], u2[..., 1])
         # wi = reflect(wo, wm)   (thesis eq. 3.8); wm is the half vector of wo and wi.
         c = ox * mx + oy * my + oz * mz
         i = 2.0 * c * mx - ox, 2.0 * c * my - oy, 2.0 * c * mz - oz
@@ -939,11 +1003,12 @@ class RoughConductorBxDF(AbstractBxDF):
 
 
 # --------------------------------------------------------------------------------------------
-# Rough dielectric (GGX)
+# Rough dielectric
 
 
 class RoughDielectricBxDF(AbstractBxDF):
-    r"""Rough dielectric interface: microfacet reflection and transmission (`Walter2007`), GGX.
+    r"""Rough dielectric interface: microfacet reflection and transmission (`Walter2007`), with
+    the GGX or Beckmann distribution.
 
     With the generalised half vector $\omega_m \propto \eta'\omega_i + \omega_o$ (facing +z),
     $\eta' = 1$ for reflection and $\eta'$ = relative index seen from `wo` for transmission:
@@ -960,9 +1025,11 @@ class RoughDielectricBxDF(AbstractBxDF):
 
     **Fields:**
 
-    - `alpha_x`, `alpha_y`: GGX roughness in (0, 1], `(...)`. [dimensionless]
+    - `alpha_x`, `alpha_y`: roughness in (0, 1], `(...)`. [dimensionless]
     - `eta`: relative index of refraction inside/outside, > 0, `(..., n_lambda)`. [dimensionless]
     - `masking`: `"height_correlated"` (default) or `"separable"` (Mitsuba 3).
+    - `distribution`: `"ggx"` (default) or `"beckmann"` (Mitsuba 3's default); stored as the
+        distribution object in the field `distribution`.
     - `dispersion`: static; whether `eta` varies with wavelength (see the module notes).
 
     !!! note "Thesis"
@@ -972,7 +1039,7 @@ class RoughDielectricBxDF(AbstractBxDF):
         `Walter2007`; `Heitz2018`; `Pharr2023` section 9.7.
     """
 
-    distribution: TrowbridgeReitzDistribution
+    distribution: TrowbridgeReitzDistribution | BeckmannDistribution
     eta: Array
     masking: str = eqx.field(static=True)
     dispersion: bool = eqx.field(static=True)
@@ -985,8 +1052,9 @@ class RoughDielectricBxDF(AbstractBxDF):
         *,
         masking: str = "height_correlated",
         dispersion: bool | None = None,
+        distribution: str = "ggx",
     ):
-        self.distribution = TrowbridgeReitzDistribution(alpha_x, alpha_y)
+        self.distribution = _make_distribution(distribution, alpha_x, alpha_y)
         self.eta = _check_eta(_spectral(eta, "eta"))
         self.masking = _check_masking(masking)
         self.dispersion = _detect_dispersion(self.eta, dispersion)
@@ -1030,6 +1098,20 @@ class RoughDielectricBxDF(AbstractBxDF):
         valid = (oz != 0) & (iz != 0) & nonzero & (dot_i * iz > 0) & (dot_o * oz > 0)
         F = _fr_dielectric_snell(dot_o, eta, inv_eta)[0]
         aoz, aiz = jnp.abs(oz), jnp.abs(iz)
+        etap2 = etap * etap
+        t = (1.0 - F) * jnp.abs(dot_i * dot_o)
+        t_f = t * etap2 if mode == "importance" else t  # the 1/eta'^2 radiance factor
+        if not _is_ggx(self.distribution):
+            # Any distribution: f_r = D G F / (4|z_o z_i|), f_t = D G t_f / (|z_o z_i| S^2),
+            # p_r = D G_1(wo) F / (4|z_o|), p_t = D G_1(wo) t eta'^2 / (|z_o| S^2).
+            D, lo, G = _generic_terms(self.distribution, o, i, (mx, my, mz), ax, ay, self.masking)
+            s = etap * dot_i + dot_o
+            den = aoz * jnp.where(reflect, 4.0, s * s)
+            use = valid & mask & (den > 0)
+            den = jnp.where(use, den, 1.0)
+            f = jnp.where(use, D * G * jnp.where(reflect, F, t_f) / (aiz * den), 0.0)
+            pdf = jnp.where(use, D * jnp.where(reflect, F, t * etap2) / ((1.0 + lo) * den), 0.0)
+            return f, pdf
         ro, ri = _slope_root(ox, oy, oz, ax, ay), _slope_root(ix, iy, iz, ax, ay)
         go = aoz + ro
         if self.masking == "height_correlated":
@@ -1041,9 +1123,6 @@ class RoughDielectricBxDF(AbstractBxDF):
         # Masked as 1/inf = 0, so that f and pdf end in their division: XLA's CPU backend then
         # computes them once instead of in every consumer (every wavelength of f).
         den = jnp.where(valid & mask & (den > 0), den, jnp.inf)
-        etap2 = etap * etap
-        t = (1.0 - F) * jnp.abs(dot_i * dot_o)
-        t_f = t * etap2 if mode == "importance" else t  # the 1/eta'^2 radiance factor
         f = (go * gn) * jnp.where(reflect, 0.25 * F, t_f) / den
         pdf = gd * jnp.where(reflect, 0.5 * F, 2.0 * t * etap2) / den
         return f, pdf
@@ -1079,7 +1158,7 @@ class RoughDielectricBxDF(AbstractBxDF):
         _, (wo, u_lobe, u2, ax, ay, eta, inv_eta) = self._bcast_all((wo, 1), (u_lobe, 0), (u2, 1))
         eta_h, inv_eta_h = eta[..., 0], inv_eta[..., 0]
         o = ox, oy, oz = _xyz(wo)
-        m = mx, my, mz = _sample_wm_xyz(ox, oy, oz, ax, ay, u2[..., 0], u2[..., 1])
+        m = mx, my, mz = _sample_m(self.distribution, o, ax, ay, u2[..., 0], u2[..., 1])
         dot_o = ox * mx + oy * my + oz * mz
         # Fresnel and Snell's law at the microfacet with the hero's eta; the interface flips
         # when wo is on the back of the microfacet (etap = 1 / eta there).
