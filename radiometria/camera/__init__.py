@@ -2,6 +2,8 @@ r"""Camera (thesis section 2.3): pinhole projection, reconstruction filters and 
 
 - `_pinhole`: coordinate spaces, `look_at`, the projection matrices of eq. 2.28-2.30,
   `PinholeCamera`, `generate_ray` and its inverse `project` (section 2.3.1);
+- `_orthographic`, `_thinlens`: `OrthographicCamera` (parallel rays) and `ThinLensCamera`
+  (depth of field, two aperture variates per sample), Mitsuba's `orthographic` and `thinlens`;
 - `_filters`: box, tent, Gaussian, Mitchell-Netravali and Lanczos filters with filter
   importance sampling (section 2.3.2, eq. 2.31-2.35);
 - `_film`: spectral samples to XYZ, per-pixel accumulation (eq. 2.35) and splatting (eq. 2.34),
@@ -49,6 +51,7 @@ from ._io import (
     write_png as write_png,
     write_spectral_exr as write_spectral_exr,
 )
+from ._orthographic import OrthographicCamera as OrthographicCamera
 from ._pinhole import (
     PinholeCamera as PinholeCamera,
     fov_x_deg as fov_x_deg,
@@ -58,3 +61,4 @@ from ._pinhole import (
     perspective_frustum as perspective_frustum,
     project as project,
 )
+from ._thinlens import ThinLensCamera as ThinLensCamera
