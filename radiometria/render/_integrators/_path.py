@@ -141,6 +141,7 @@ def path_radiance(
     chunk: int | None = None,
     active: Bool[Array, " n"] | None = None,
     compact: bool = True,
+    hide_emitters: bool = False,
 ) -> Float[Array, "n k"]:
     r"""Spectral radiance arriving along each ray, by path tracing with NEE, MIS and roulette.
 
@@ -166,6 +167,9 @@ def path_radiance(
         path in every segment and discards the results of terminated ones: the same estimate
         (up to float rounding), slower once paths terminate, but differentiable in reverse
         mode (`jax.grad`); forward mode (`jax.jacfwd`) works either way (module docstring).
+    - `hide_emitters`: emitters seen directly along the given rays (segment 0: area lights
+        hit and lights at infinity seen by escaping rays) contribute nothing (Mitsuba's
+        `hide_emitters`); their light still reaches the scene. Static bool, default False.
 
     **Returns:**
 
@@ -187,6 +191,8 @@ def path_radiance(
         raise ValueError(f"`rr_depth` must be an int >= 1, got {rr_depth!r}.")
     if not isinstance(compact, bool):
         raise TypeError(f"`compact` must be a bool, got {compact!r}.")
+    if not isinstance(hide_emitters, bool):
+        raise TypeError(f"`hide_emitters` must be a bool, got {hide_emitters!r}.")
     n_rays = origins.shape[0]
     if callable(u):
         sample = u
@@ -244,6 +250,7 @@ def path_radiance(
             b,
             max_depth=max_depth,
             rr_depth=rr_depth,
+            hide_emitters=hide_emitters,
         )
 
         def keep(x, old):
@@ -268,6 +275,7 @@ def path_radiance(
                 b,
                 max_depth=max_depth,
                 rr_depth=rr_depth,
+                hide_emitters=hide_emitters,
             )
             return jax.tree.map(lambda a, x: a.at[sel].set(x, mode="drop"), state, new)
 
@@ -305,7 +313,15 @@ class _PathState(eqx.Module):
 
 
 def _segment(
-    scene: RenderScene, state: _PathState, wavelength_nm, sample, b, *, max_depth, rr_depth
+    scene: RenderScene,
+    state: _PathState,
+    wavelength_nm,
+    sample,
+    b,
+    *,
+    max_depth,
+    rr_depth,
+    hide_emitters=False,
 ) -> _PathState:
     """Trace segment `b` of every path: its hit and the emission found there (MIS-weighted
     against next-event estimation), then, unless it is the last segment, the vertex's light
@@ -320,6 +336,8 @@ def _segment(
     le = jnp.where(v.valid[:, None], le, le_inf)
     pdf_light = jnp.where(v.valid, pdf_light, scene.light.pdf_escaped(state.d))
     w = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
+    if hide_emitters:  # emitters seen directly from the camera are black (Mitsuba)
+        w = jnp.where(b == 0, 0.0, w)
     radiance = state.radiance + state.beta * le * w[:, None]
     state = eqx.tree_at(lambda s: (s.radiance, s.alive), state, (radiance, state.alive & v.valid))
     if max_depth == 1:
@@ -412,6 +430,8 @@ class Path(AbstractIntegrator):
         directly, 2 = direct illumination), a static int >= 1 (default 8).
     - `rr_depth`: number of segments after which Russian roulette starts (Mitsuba's
         `rr_depth`, default 5); a value >= `max_depth` turns roulette off.
+    - `hide_emitters`: emitters seen directly from the camera are black (Mitsuba's
+        `hide_emitters`, default False); static bool.
 
     !!! note "Thesis"
         Chapter 8 (light transport; title only in the text), estimated with the methods of
@@ -425,20 +445,27 @@ class Path(AbstractIntegrator):
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"max_depth", "rr_depth", "hide_emitters"})
     max_depth: int = eqx.field(static=True, default=8)
     rr_depth: int = eqx.field(static=True, default=5)
+    hide_emitters: bool = eqx.field(static=True, default=False)
 
     def __check_init__(self):
         for name in ("max_depth", "rr_depth"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
+        if not isinstance(self.hide_emitters, bool):
+            raise TypeError(f"`hide_emitters` must be a bool, got {self.hide_emitters!r}.")
 
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "Path":
         """From a scene file's `max_depth` (default 8; -1 = unbounded, taken as
-        `DEFAULT_UNBOUNDED_DEPTH`) and `rr_depth` (default 5)."""
+        `DEFAULT_UNBOUNDED_DEPTH`), `rr_depth` (default 5) and `hide_emitters` (default
+        false)."""
         depth = params.get("max_depth", 8)
         depth = DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
-        return cls(max_depth=depth, rr_depth=params.get("rr_depth", 5))
+        hide = params.get("hide_emitters", False)
+        if not isinstance(hide, bool):
+            raise ValueError(f"{where}: `hide_emitters` must be a boolean, got {hide!r}.")
+        return cls(max_depth=depth, rr_depth=params.get("rr_depth", 5), hide_emitters=hide)
 
     def sample_dimensions(self) -> int:
         return sample_dimensions(self.max_depth)
@@ -457,4 +484,5 @@ class Path(AbstractIntegrator):
             max_depth=self.max_depth,
             rr_depth=self.rr_depth,
             active=active,
+            hide_emitters=self.hide_emitters,
         )

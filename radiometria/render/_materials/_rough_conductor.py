@@ -1,4 +1,4 @@
-"""Mitsuba's `roughconductor` BSDF: microfacet metal (thesis ch. 3; Trowbridge-Reitz)."""
+"""Mitsuba's `roughconductor` BSDF: microfacet metal (thesis ch. 3; Beckmann or GGX)."""
 
 from typing import ClassVar
 
@@ -10,6 +10,20 @@ from .._textures import AbstractTexture
 from ._base import AbstractMaterial, Properties, ScaledBxDF, scalar, unknown_parameters
 from ._conductor import conductor_textures, valid_ior
 
+DISTRIBUTIONS = ("beckmann", "ggx")
+
+
+def distribution(params: Properties, where: str) -> str:
+    """The scene's `distribution`: Mitsuba's default is `"beckmann"` for `roughconductor`
+    and `roughdielectric` (`Jakob2022`); `"ggx"` is the other one supported."""
+    value = params.get("distribution", "beckmann")
+    if value not in DISTRIBUTIONS:
+        raise ValueError(
+            f"{where}: unknown microfacet distribution {value!r}; valid: "
+            f"{', '.join(map(repr, DISTRIBUTIONS))} (default 'beckmann')."
+        )
+    return value
+
 
 def roughness(params: Properties, where: str) -> tuple[Array, Array]:
     """`(alpha_u, alpha_v)` as `(1,)` float32 arrays (Mitsuba's default `alpha` = 0.1)."""
@@ -20,12 +34,12 @@ def roughness(params: Properties, where: str) -> tuple[Array, Array]:
 
 
 class RoughConductor(AbstractMaterial):
-    """Rough conductors (Mitsuba's `roughconductor`) with the Trowbridge-Reitz (GGX)
-    distribution of `radiometria.scattering`, anisotropic `alpha_u`/`alpha_v` as given.
-
-    The scene's `distribution` is read but GGX is used whatever it says (Mitsuba's default is
-    Beckmann; the two differ in the tails of the highlight); `sample_visible` is read and
-    visible normals are always sampled.
+    """Rough conductors (Mitsuba's `roughconductor`) with the Beckmann distribution (Mitsuba's
+    default) and anisotropic `alpha_u`/`alpha_v` as given; `distribution="ggx"` gives
+    `GGXRoughConductor`, the same plugin with the Trowbridge-Reitz (GGX) distribution (a
+    separate kind, so that scenes may mix the two). An unknown `distribution` is an error.
+    `sample_visible` is read and visible normals are always sampled (the estimate's
+    expectation is the same; only the noise differs).
 
     **Fields:**
 
@@ -37,10 +51,12 @@ class RoughConductor(AbstractMaterial):
         Chapter 3 (glossy reflection), eq. 3.13-3.18.
 
     ??? cite "References"
-        `Walter2007`; `Heitz2018`; `Jakob2022` (`roughconductor`); `Pharr2023` §9.6.
+        `Walter2007`; `Heitz2018`; `HeitzDEon2014`; `Jakob2022` (`roughconductor`);
+        `Pharr2023` §9.6.
     """
 
     NAME: ClassVar[str] = "roughconductor"
+    DISTRIBUTION: ClassVar[str] = "beckmann"
     PARAMETERS: ClassVar[frozenset[str]] = frozenset(
         {"material", "eta", "k", "specular_reflectance", "distribution", "alpha", "alpha_u",
          "alpha_v", "sample_visible"}
@@ -55,7 +71,8 @@ class RoughConductor(AbstractMaterial):
     @classmethod
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
         unknown_parameters(params, cls, where)
-        return cls(
+        kind = {"beckmann": RoughConductor, "ggx": GGXRoughConductor}[distribution(params, where)]
+        return kind(
             *conductor_textures(params, where),
             *roughness(params, where),
             jnp.asarray([two_sided], bool),
@@ -64,5 +81,13 @@ class RoughConductor(AbstractMaterial):
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
         refl = self.specular_reflectance(row, wavelength_nm)
         eta, k = valid_ior(self.eta(row, wavelength_nm), self.k(row, wavelength_nm))
-        bxdf = RoughConductorBxDF(self.alpha_u[row], eta, k, self.alpha_v[row])
+        bxdf = RoughConductorBxDF(
+            self.alpha_u[row], eta, k, self.alpha_v[row], distribution=self.DISTRIBUTION
+        )
         return ScaledBxDF(bxdf, refl, refl)
+
+
+class GGXRoughConductor(RoughConductor):
+    """`RoughConductor` with the Trowbridge-Reitz (GGX) distribution (`distribution="ggx"`)."""
+
+    DISTRIBUTION: ClassVar[str] = "ggx"

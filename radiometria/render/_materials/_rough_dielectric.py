@@ -9,12 +9,13 @@ from ...scattering import RoughDielectricBxDF
 from .._textures import AbstractTexture
 from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
 from ._dielectric import dielectric_textures
-from ._rough_conductor import roughness
+from ._rough_conductor import distribution, roughness
 
 
 class RoughDielectric(AbstractMaterial):
-    """Rough dielectric interfaces (Mitsuba's `roughdielectric`) with the Trowbridge-Reitz
-    (GGX) distribution whatever the scene's `distribution` says (as `RoughConductor`).
+    """Rough dielectric interfaces (Mitsuba's `roughdielectric`) with the Beckmann distribution
+    (Mitsuba's default); `distribution="ggx"` gives `GGXRoughDielectric` (Trowbridge-Reitz),
+    as `RoughConductor`. `sample_visible` is read; visible normals are always sampled.
 
     **Fields:**
 
@@ -26,10 +27,11 @@ class RoughDielectric(AbstractMaterial):
         Chapter 3 (glossy transmission), eq. 3.13-3.18.
 
     ??? cite "References"
-        `Walter2007`; `Jakob2022` (`roughdielectric`); `Pharr2023` §9.7.
+        `Walter2007`; `HeitzDEon2014`; `Jakob2022` (`roughdielectric`); `Pharr2023` §9.7.
     """
 
     NAME: ClassVar[str] = "roughdielectric"
+    DISTRIBUTION: ClassVar[str] = "beckmann"
     PARAMETERS: ClassVar[frozenset[str]] = frozenset(
         {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance",
          "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"}
@@ -45,7 +47,8 @@ class RoughDielectric(AbstractMaterial):
     @classmethod
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
         unknown_parameters(params, cls, where)
-        return cls(
+        kind = {"beckmann": RoughDielectric, "ggx": GGXRoughDielectric}[distribution(params, where)]
+        return kind(
             *dielectric_textures(params, where),
             *roughness(params, where),
             jnp.asarray([two_sided], bool),
@@ -54,7 +57,15 @@ class RoughDielectric(AbstractMaterial):
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
         eta = jnp.maximum(self.eta(row, wavelength_nm), 1e-3)
         return ScaledBxDF(
-            RoughDielectricBxDF(self.alpha_u[row], eta, self.alpha_v[row]),
+            RoughDielectricBxDF(
+                self.alpha_u[row], eta, self.alpha_v[row], distribution=self.DISTRIBUTION
+            ),
             self.specular_reflectance(row, wavelength_nm),
             self.specular_transmittance(row, wavelength_nm),
         )
+
+
+class GGXRoughDielectric(RoughDielectric):
+    """`RoughDielectric` with the Trowbridge-Reitz (GGX) distribution (`distribution="ggx"`)."""
+
+    DISTRIBUTION: ClassVar[str] = "ggx"

@@ -30,7 +30,9 @@ and rejects everything else with an error that names the file, the line and the 
   `"l1:v1, l2:v2, ..."` in nm) or blackbody (`<spectrum type="blackbody">` with
   `temperature` and optional `scale`, or Mitsuba 0.6's `<blackbody temperature=...>`).
 - `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,
-  diagonal, as Mitsuba), `to_world`, `near_clip`, `far_clip`; nested `film` and `sampler`.
+  diagonal, as Mitsuba), `to_world`, `near_clip`, `far_clip`; `thinlens` with those and
+  `aperture_radius` (required), `focus_distance`; `orthographic` (`to_world`, whose scale sets
+  the imaged extent, `near_clip`, `far_clip`); nested `film` and `sampler`.
 - `film`: `hdrfilm` `width`, `height` (other options ignored) and an `rfilter`: `box`,
   `tent`, `gaussian`, `mitchell`, `catmullrom` or `lanczos` with its parameters.
 - `sampler`: any type; `sample_count` becomes the scene's `spp`.
@@ -256,6 +258,74 @@ def _spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
     return value
 
 
+def _checked_spectrum(ctx: _Ctx, node: _Node, wl: np.ndarray, val: np.ndarray, what: str):
+    """A `PiecewiseLinearSpectrum` of >= 2 strictly increasing wavelengths [nm]."""
+    if len(wl) < 2 or np.any(np.diff(wl) <= 0):
+        raise ctx.err(node, f"{what}: expected >= 2 strictly increasing wavelengths [nm]")
+    if not (np.all(np.isfinite(wl)) and np.all(np.isfinite(val))):
+        raise ctx.err(node, f"{what}: non-finite wavelength or value")
+    return PiecewiseLinearSpectrum(wl, val)
+
+
+def _tabulated_spectrum(ctx: _Ctx, node: _Node, kind: str) -> PiecewiseLinearSpectrum:
+    """Mitsuba 3's `<spectrum type="regular">` (`wavelength_min`, `wavelength_max` [nm],
+    `values` evenly spaced) and `type="irregular"` (`wavelengths` [nm], `values`)."""
+    _only_children(ctx, node, {"float", "string"})
+    props = {}
+    for ch in node.children:
+        props[ctx.attr(ch, "name")] = ctx.attr(ch, "value")
+    names = {"regular": {"wavelength_min", "wavelength_max", "values"},
+             "irregular": {"wavelengths", "values"}}[kind]  # fmt: skip
+    if set(props) != names:
+        raise ctx.err(
+            node, f"a {kind!r} spectrum needs exactly the parameters {sorted(names)}, got "
+            f"{sorted(props)}"
+        )  # fmt: skip
+    val = ctx.floats(node, props["values"])
+    if kind == "regular":
+        lo = float(ctx.floats(node, props["wavelength_min"], 1)[0])
+        hi = float(ctx.floats(node, props["wavelength_max"], 1)[0])
+        if not hi > lo:
+            raise ctx.err(node, f"wavelength_max ({hi}) must exceed wavelength_min ({lo}) [nm]")
+        wl = np.linspace(lo, hi, val.size)
+    else:
+        wl = ctx.floats(node, props["wavelengths"])
+        if wl.size != val.size:
+            raise ctx.err(node, f"{wl.size} wavelengths but {val.size} values")
+    return _checked_spectrum(ctx, node, wl, val, f"{kind} spectrum")
+
+
+def _spectrum_file(ctx: _Ctx, node: _Node) -> PiecewiseLinearSpectrum:
+    """Mitsuba's spectrum file (`.spd`): lines `wavelength value` (nm, any unit), `#` starts
+    a comment. Errors name the scene file and line and the spectrum file's line."""
+    path = ctx.resolve(node, ctx.attr(node, "filename"))
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(
+            f"{node.file or ctx.file}:{node.line}: spectrum file not found: {path}"
+        ) from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ctx.err(node, f"cannot read spectrum file {path}: {e}") from None
+    wl, val = [], []
+    for number, line in enumerate(text.splitlines(), 1):
+        fields = line.split("#", 1)[0].split()
+        if not fields:
+            continue
+        try:
+            if len(fields) != 2:
+                raise ValueError
+            a, b = float(fields[0]), float(fields[1])
+        except ValueError:
+            raise ctx.err(
+                node, f"spectrum file {path}, line {number}: expected 'wavelength value', got "
+                f"{line.strip()[:80]!r}"
+            ) from None  # fmt: skip
+        wl.append(a)
+        val.append(b)
+    return _checked_spectrum(ctx, node, np.array(wl), np.array(val), f"spectrum file {path}")
+
+
 def _parse_spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
     if node.tag == "rgb":
         text = ctx.attr(node, "value").strip()
@@ -287,10 +357,15 @@ def _parse_spectrum_value(ctx: _Ctx, node: _Node) -> SpectralValue:
             if not isinstance(scale, float):
                 raise ctx.err(node, f"a blackbody scale must be a number, got {scale!r}")
             return BlackbodySpectrum(t, scale)
+        if kind in ("regular", "irregular"):
+            return _tabulated_spectrum(ctx, node, kind)
         if kind:
-            raise ctx.err(node, f"unsupported spectrum type {kind!r} (line {node.line})")
+            raise ctx.err(
+                node, f"unsupported spectrum type {kind!r} (line {node.line}); supported: "
+                "'blackbody', 'regular', 'irregular'"
+            )  # fmt: skip
         if "filename" in node.attrib:
-            raise ctx.err(node, "spectrum files are not supported; give value='l1:v1, ...'")
+            return _spectrum_file(ctx, node)
         text = ctx.attr(node, "value")
         if ":" not in text:
             return float(ctx.floats(node, text, 1)[0])
@@ -355,7 +430,7 @@ _TYPES = {
                            "emitter_samples", "bsdf_samples", "shading_samples")),
     float: ("a <float>", ("fov", "near_clip", "far_clip", "radius", "alpha", "alpha_u",
                           "alpha_v", "temperature", "stddev", "B", "C", "lobes",
-                          "focus_distance", "principal_point_offset_x",
+                          "focus_distance", "aperture_radius", "principal_point_offset_x",
                           "principal_point_offset_y", "scale")),
     str: ("a <string>", ("fov_axis", "focal_length", "filename", "material", "distribution",
                          "pixel_format", "component_format", "file_format")),
@@ -668,6 +743,33 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
     )  # fmt: skip
 
 
+_SENSOR_COMMON = {"to_world", "near_clip", "far_clip"}
+_SENSOR_PARAMS = {
+    "perspective": _SENSOR_COMMON | {"fov", "fov_axis", "focal_length", "focus_distance",
+                                     "principal_point_offset_x", "principal_point_offset_y"},
+    "thinlens": _SENSOR_COMMON | {"fov", "fov_axis", "focal_length", "focus_distance",
+                                  "aperture_radius"},
+    "orthographic": _SENSOR_COMMON,
+}  # fmt: skip
+
+
+def _sensor_lens(ctx: _Ctx, node: _Node, kind: str, props: dict) -> dict:
+    """The `type` and lens fields of the `CameraDescription` of a sensor: a `thinlens` needs
+    `aperture_radius` >= 0 (as in Mitsuba); its `focus_distance` (> 0) defaults to
+    `far_clip`, Mitsuba's default."""
+    if kind != "thinlens":
+        return {"type": kind}
+    if "aperture_radius" not in props:
+        raise ctx.err(node, f"sensor 'thinlens' (line {node.line}) needs 'aperture_radius'")
+    radius = float(props["aperture_radius"])
+    focus = float(props.get("focus_distance", props.get("far_clip", 1e4)))
+    if not (math.isfinite(radius) and radius >= 0.0):
+        raise ctx.err(node, f"aperture_radius must be >= 0 [scene units], got {radius}")
+    if not (math.isfinite(focus) and focus > 0.0):
+        raise ctx.err(node, f"focus_distance must be > 0 [scene units], got {focus}")
+    return {"type": kind, "aperture_radius": radius, "focus_distance": focus}
+
+
 def _sensor(ctx: _Ctx, node: _Node):
     kind = ctx.attr(node, "type")
     if kind not in CAMERAS:
@@ -676,17 +778,25 @@ def _sensor(ctx: _Ctx, node: _Node):
             f"{sorted(CAMERAS)}"
         )  # fmt: skip
     _only_children(ctx, node, {"film", "sampler"})
-    props = _properties(
-        ctx, node, {"fov", "fov_axis", "focal_length", "to_world", "near_clip", "far_clip",
-                    "focus_distance", "principal_point_offset_x", "principal_point_offset_y"}
-    )  # fmt: skip
+    props = _properties(ctx, node, _SENSOR_PARAMS[kind])
+    lens = _sensor_lens(ctx, node, kind, props)
+    # `focus_distance` of a `perspective` sensor is read and unused, as in Mitsuba 3 (only a
+    # `thinlens` has a focal plane). A principal point offset is not implemented: refused.
+    for name in ("principal_point_offset_x", "principal_point_offset_y"):
+        if props.get(name, 0.0) != 0.0:
+            raise ctx.err(
+                node, f"parameter '{name}' = {props[name]} is not supported (only 0: the image "
+                "centre on the optical axis)"
+            )  # fmt: skip
     to_world = props.get("to_world", np.eye(4))
     if not abs(np.linalg.det(to_world[:3, :3])) > 1e-12:
         raise ctx.err(node, "degenerate camera transform: its 3x3 part is singular")
     axis = props.get("fov_axis", "x")
     if axis not in ("x", "y", "diagonal", "smaller", "larger"):
         raise ctx.err(node, f"unknown fov_axis {axis!r}")
-    if "fov" in props:
+    if kind == "orthographic":  # no field of view: the to_world scale sets the extent
+        fov, axis = 90.0, "x"
+    elif "fov" in props:
         fov = props["fov"] if isinstance(props["fov"], float) else None
     else:
         f_mm = props.get("focal_length", "50mm").strip().removesuffix("mm")
@@ -696,6 +806,7 @@ def _sensor(ctx: _Ctx, node: _Node):
     if fov is None or not 0 < fov < 180:
         raise ctx.err(node, f"fov must be in (0, 180) degrees, got {fov}")
     camera = CameraDescription(
+        **lens,
         to_world=to_world,
         fov_deg=float(fov),
         fov_axis=axis,
@@ -711,6 +822,14 @@ def _sensor(ctx: _Ctx, node: _Node):
             _only_children(ctx, ch, set())
             sp = _properties(ctx, ch, {"sample_count", "seed", "jitter", "scramble_seed"})
             spp = sp.get("sample_count")
+            # The render seed is the caller's (`render(seed=...)`, `--seed`, default 0): a
+            # scene's other seed would be silently dropped, so it is refused.
+            for name in ("seed", "scramble_seed"):
+                if sp.get(name, 0) != 0:
+                    raise ctx.err(
+                        ch, f"parameter '{name}' = {sp[name]} is not supported (only 0); give "
+                        "the seed to render(seed=...) or the command line's --seed"
+                    )  # fmt: skip
     return camera, film, spp
 
 
@@ -727,6 +846,14 @@ def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
     width, height = props.get("width", 768), props.get("height", 576)
     if width < 1 or height < 1:
         raise ctx.err(node, f"width and height must be >= 1 [px], got {width} x {height}")
+    # A crop window other than the whole film is not implemented: refused (file, line, name).
+    full = {"crop_offset_x": 0, "crop_offset_y": 0, "crop_width": width, "crop_height": height}
+    for name, value in full.items():
+        if props.get(name, value) != value:
+            raise ctx.err(
+                node, f"parameter '{name}' = {props[name]} is not supported: crop windows are "
+                f"not implemented (only the whole {width} x {height} film)"
+            )  # fmt: skip
     kind_f, params = "gaussian", dict(_FILTER_DEFAULTS["gaussian"])
     for ch in node.children:
         if ch.tag == "rfilter":

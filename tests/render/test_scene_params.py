@@ -1,0 +1,180 @@
+"""Scene parameters that were once accepted and ignored (issue 12): the microfacet
+`distribution` of rough BSDFs (Mitsuba's default Beckmann), `hide_emitters` of `path`,
+sampler seeds, film crop windows, principal point offsets, `focus_distance` of a pinhole
+camera, and spectra from `.spd` files and `regular`/`irregular` spectrum plugins."""
+
+import numpy as np
+import pytest
+
+from radiometria.render._materials._rough_conductor import GGXRoughConductor, RoughConductor
+from radiometria.render._materials._rough_dielectric import GGXRoughDielectric, RoughDielectric
+from radiometria.render._scenes._mitsuba_xml import load_mitsuba_xml
+
+SIZE = 16
+
+
+def _xml(body: str, *, integrator: str = "", sensor: str = "", film: str = "", sampler: str = ""):
+    """A sphere on a grey floor, lit by a rectangle light that the camera sees."""
+    return f"""<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="4"/>{integrator}</integrator>
+  <sensor type="perspective">
+    <float name="fov" value="50"/>{sensor}
+    <transform name="to_world"><lookat origin="0, 0.5, 4" target="0, 0.3, 0" up="0, 1, 0"/>
+    </transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/>{sampler}</sampler>
+    <film type="hdrfilm"><integer name="width" value="{SIZE}"/>
+      <integer name="height" value="{SIZE}"/><rfilter type="gaussian"/>{film}</film>
+  </sensor>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/>
+      <translate y="-1"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale x="1.5" y="0.4"/><translate y="1.9" z="-1.5"/>
+    </transform>
+    <emitter type="area"><rgb name="radiance" value="5, 5, 5"/></emitter>
+  </shape>
+  {body}
+</scene>
+"""
+
+
+BECKMANN_BALL = """<shape type="sphere"><float name="radius" value="0.8"/>
+    <bsdf type="roughconductor"><string name="material" value="Cu"/>
+      <float name="alpha" value="0.3"/></bsdf></shape>"""
+
+
+@pytest.mark.slow
+def test_beckmann_rough_conductor_and_hidden_emitters_match_mitsuba(tmp_path):
+    """A copper ball (roughconductor with Mitsuba's default distribution, Beckmann) and the
+    visible light hidden (`hide_emitters`) against Mitsuba 3, pixel by pixel."""
+    pytest.importorskip("mitsuba")
+    from ._mitsuba import z_test_against_mitsuba
+
+    path = tmp_path / "scene.xml"
+    path.write_text(_xml(BECKMANN_BALL, integrator='<boolean name="hide_emitters" value="true"/>'))
+    res = z_test_against_mitsuba(path, spp=64, ref_spp=512)
+    assert res.passed, res.message
+
+
+def test_hide_emitters_blackens_only_directly_seen_emitters(tmp_path):
+    from radiometria.render import render
+
+    shown, hidden = tmp_path / "shown.xml", tmp_path / "hidden.xml"
+    shown.write_text(_xml(BECKMANN_BALL))
+    hidden.write_text(
+        _xml(BECKMANN_BALL, integrator='<boolean name="hide_emitters" value="true"/>')
+    )
+    a = np.asarray(render(shown, spp=4, return_xyz=True, progress=False))[..., 1]
+    b = np.asarray(render(hidden, spp=4, return_xyz=True, progress=False))[..., 1]
+    # The light (Y = 5 x the luminance of white) fills some pixels of the top rows; hidden,
+    # those pixels see only what lies behind it (black background).
+    lit = a > 4.0
+    assert lit.any() and float(b[lit].max()) < 1e-6
+    # Everywhere else the same samples give the same estimate.
+    np.testing.assert_allclose(b[~lit & (b > 0)], a[~lit & (b > 0)], rtol=1e-5)
+
+
+def test_distribution_selects_the_plugin_kind():
+    where = "scene.xml:7"
+    for cls, ggx in ((RoughConductor, GGXRoughConductor), (RoughDielectric, GGXRoughDielectric)):
+        assert type(cls.from_properties({}, where=where)) is cls  # Mitsuba's default: Beckmann
+        assert cls.from_properties({}, where=where).DISTRIBUTION == "beckmann"
+        assert type(cls.from_properties({"distribution": "beckmann"}, where=where)) is cls
+        assert type(cls.from_properties({"distribution": "ggx"}, where=where)) is ggx
+        with pytest.raises(ValueError, match="scene.xml:7.*'phong'.*'beckmann', 'ggx'"):
+            cls.from_properties({"distribution": "phong"}, where=where)
+
+
+@pytest.mark.parametrize(
+    "where,xml,match",
+    [
+        ("sampler", '<integer name="seed" value="3"/>', "seed.*3.*--seed"),
+        ("film", '<integer name="crop_width" value="8"/>', "crop_width.*8"),
+        ("film", '<integer name="crop_offset_y" value="2"/>', "crop_offset_y.*2"),
+        ("sensor", '<float name="principal_point_offset_x" value="0.1"/>', "principal_point"),
+    ],
+)
+def test_unsupported_sensor_values_are_refused(tmp_path, where, xml, match):
+    path = tmp_path / "scene.xml"
+    path.write_text(_xml("", **{where: xml}))
+    with pytest.raises(ValueError, match=rf"scene.xml:\d+: .*{match}"):
+        load_mitsuba_xml(path)
+
+
+def test_default_sensor_values_are_accepted(tmp_path):
+    """Values equal to Mitsuba's defaults change nothing; a pinhole's `focus_distance` is
+    read and unused, as by Mitsuba 3's `perspective` (only `thinlens` focuses)."""
+    path = tmp_path / "scene.xml"
+    path.write_text(
+        _xml(
+            "",
+            sampler='<integer name="seed" value="0"/>',
+            film=f'<integer name="crop_width" value="{SIZE}"/><integer name="crop_offset_x" '
+            'value="0"/>',
+            sensor='<float name="focus_distance" value="3"/><float '
+            'name="principal_point_offset_y" value="0"/>',
+        )
+    )
+    desc = load_mitsuba_xml(path)
+    assert (desc.film.width, desc.film.height) == (SIZE, SIZE)
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("scalar_spectral")
+    # Mitsuba's perspective camera queries focus_distance (no "unused property" error).
+    mi.load_dict({"type": "perspective", "focus_distance": 3.0})
+
+
+def _reflectance(tmp_path, spectrum: str):
+    path = tmp_path / "scene.xml"
+    path.write_text(_xml(f'<shape type="sphere"><bsdf type="diffuse">{spectrum}</bsdf></shape>'))
+    desc = load_mitsuba_xml(path)
+    return next(m for m in desc.materials if "reflectance" in m.params).params["reflectance"]
+
+
+def test_spectrum_files_and_tabulated_spectra(tmp_path):
+    wl = np.array([400.0, 480.0, 550.0, 700.0])
+    val = np.array([0.1, 0.5, 0.3, 0.9])
+    lines = [
+        "# measured reflectance",
+        "",
+        *(f"{a}  {b}   # ok" for a, b in zip(wl, val, strict=True)),
+    ]
+    (tmp_path / "r.spd").write_text("\n".join(lines) + "\n")
+    x = np.linspace(380.0, 720.0, 35)
+    ref = np.interp(x, wl, val, left=0.0, right=0.0)
+    spec = _reflectance(tmp_path, '<spectrum name="reflectance" filename="r.spd"/>')
+    np.testing.assert_allclose(np.asarray(spec(x)), ref, rtol=1e-12)
+    irr = (
+        '<spectrum name="reflectance" type="irregular"><string name="wavelengths" '
+        'value="400, 480, 550, 700"/><string name="values" value="0.1, 0.5, 0.3, 0.9"/>'
+        "</spectrum>"
+    )
+    np.testing.assert_allclose(np.asarray(_reflectance(tmp_path, irr)(x)), ref, rtol=1e-12)
+    reg = (
+        '<spectrum name="reflectance" type="regular"><float name="wavelength_min" value="400"/>'
+        '<float name="wavelength_max" value="700"/><string name="values" value="0.2, 0.8, 0.4"/>'
+        "</spectrum>"
+    )
+    ref = np.interp(x, [400.0, 550.0, 700.0], [0.2, 0.8, 0.4], left=0.0, right=0.0)
+    np.testing.assert_allclose(np.asarray(_reflectance(tmp_path, reg)(x)), ref, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "content,match",
+    [
+        ("400 0.5\n500 oops\n", r"r.spd, line 2.*oops"),
+        ("400 0.5 1\n", r"r.spd, line 1"),
+        ("500 0.5\n400 0.5\n", "strictly increasing"),
+        ("400 0.5\n500 -1\n", "reflectance"),
+    ],
+)
+def test_bad_spectrum_files_name_file_and_line(tmp_path, content, match):
+    (tmp_path / "r.spd").write_text(content)
+    with pytest.raises(ValueError, match=rf"scene.xml:\d+: .*{match}"):
+        _reflectance(tmp_path, '<spectrum name="reflectance" filename="r.spd"/>')
+
+
+def test_missing_spectrum_file(tmp_path):
+    with pytest.raises(FileNotFoundError, match=r"scene.xml:\d+: .*nope.spd"):
+        _reflectance(tmp_path, '<spectrum name="reflectance" filename="nope.spd"/>')
