@@ -36,7 +36,7 @@ from ._materials import (
 from ._materials._null import Null
 from ._media import GridMediumPlugin, HomogeneousMediumPlugin
 from ._samplers import Independent, OwenSobol
-from ._textures import ConstantTexture
+from ._textures import BitmapTexture, CheckerboardTexture, ConstantTexture
 
 __all__ = [
     "ACCELERATORS",  # from _accelerators
@@ -70,7 +70,11 @@ MEDIA = _by_name(HomogeneousMediumPlugin, GridMediumPlugin)
 # `radiometria render --sampler`.
 SAMPLERS = _by_name(Independent, OwenSobol)
 # Spectral values of scene files are constant textures until textures arrive (scene format).
-TEXTURES = {"constant": ConstantTexture}
+TEXTURES = {
+    "constant": ConstantTexture,
+    "bitmap": BitmapTexture,
+    "checkerboard": CheckerboardTexture,
+}
 # Mitsuba 3's `<sensor type=...>` names.
 CAMERAS = {
     "perspective": PinholeCamera,
