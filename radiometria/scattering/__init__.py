@@ -7,6 +7,8 @@
 - `_microfacet`: the Trowbridge-Reitz (GGX) and Beckmann distributions with visible-normal sampling;
 - `_bxdfs`: BxDFs (eq. 3.4) with `f`, `sample_f`, `pdf`: Lambertian, Oren-Nayar, diffuse
   transmission, retroreflection, smooth and rough conductor and dielectric, two-sided wrapper;
+- `_plastic`, `_thin_dielectric`, `_blend`: smooth and rough plastic, the thin dielectric slab,
+  blends of two BxDFs and partly transparent (masked) surfaces (Mitsuba 3's plugins);
 - `_properties`: absorptance from eq. 3.2, the flux-weighted -ances of table 3.1, slab and
   thick-layer properties and the -ivities of the glossary;
 - `_reflectance`: the reflectance quantities of table 3.2 by Monte Carlo.
@@ -15,6 +17,7 @@ Conventions: the normal points out of the surface; in the local shading frame it
 directions point away from the surface and are unit vectors (assumed, not checked).
 """
 
+from ._blend import BlendBxDF as BlendBxDF, MaskBxDF as MaskBxDF
 from ._bxdfs import (
     AbstractBxDF as AbstractBxDF,
     BSDFSample as BSDFSample,
@@ -77,6 +80,12 @@ from ._microfacet import (
     TrowbridgeReitzDistribution as TrowbridgeReitzDistribution,
     roughness_to_alpha as roughness_to_alpha,
 )
+from ._plastic import (
+    PlasticBxDF as PlasticBxDF,
+    RoughPlasticBxDF as RoughPlasticBxDF,
+    fresnel_diffuse_reflectance as fresnel_diffuse_reflectance,
+    rough_plastic_tables as rough_plastic_tables,
+)
 from ._properties import (
     absorptance as absorptance,
     absorptivity as absorptivity,
@@ -99,4 +108,8 @@ from ._reflectance import (
     hemispherical_conical_reflectance as hemispherical_conical_reflectance,
     hemispherical_directional_reflectance as hemispherical_directional_reflectance,
     normalised_hemispherical_directional_reflectance as normalised_hemispherical_directional_reflectance,  # noqa: E501
+)
+from ._thin_dielectric import (
+    ThinDielectricBxDF as ThinDielectricBxDF,
+    thin_slab_reflectance as thin_slab_reflectance,
 )
