@@ -2,11 +2,11 @@
 
 import numpy as np
 
-from ...camera import AbstractFilter, PinholeCamera
+from ...camera import AbstractCamera, AbstractFilter, OrthographicCamera, ThinLensCamera
 from .._integrators import AbstractIntegrator
 from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
 from .._lights import AreaLight
-from .._registry import FILTERS, INTEGRATORS, LIGHTS, MATERIALS, MEDIA
+from .._registry import CAMERAS, FILTERS, INTEGRATORS, LIGHTS, MATERIALS, MEDIA
 from .._render_scene import RenderScene
 from ._description import SceneDescription, SceneError
 
@@ -125,8 +125,8 @@ def scene_lights(description: SceneDescription) -> list:
 
 def compile_scene(
     description: SceneDescription, *, width=None, height=None, accelerator="auto"
-) -> tuple[RenderScene, PinholeCamera, AbstractFilter]:
-    """Turn a loaded scene (`load_scene`) into `(RenderScene, PinholeCamera, filter)`.
+) -> tuple[RenderScene, AbstractCamera, AbstractFilter]:
+    """Turn a loaded scene (`load_scene`) into `(RenderScene, camera, filter)`.
 
     Each material's `type` names its plugin in the `MATERIALS` registry, which reads the
     material's parameters (`from_properties`); their spectra and the emitters' are tabulated
@@ -178,17 +178,33 @@ def compile_scene(
         face_uv=face_uvs(description),
         **_surface_attributes(description),
     )
+    return scene, scene_camera(description, width, height), scene_filter(description)
+
+
+def scene_camera(description: SceneDescription, width=None, height=None) -> AbstractCamera:
+    """The camera of a loaded scene: the `CAMERAS` plugin its `camera.type` names
+    (`PinholeCamera`, `ThinLensCamera`, `OrthographicCamera`), `width` x `height` [px]
+    (default: the scene's film)."""
     cam = description.camera
-    camera = PinholeCamera.from_to_world(
-        np.asarray(cam.to_world, np.float64),
-        float(cam.fov_deg),
-        description.film.width if width is None else width,
-        description.film.height if height is None else height,
-        cam.fov_axis,
-        near_clip=cam.near_clip,
-        far_clip=cam.far_clip,
-    )
-    return scene, camera, scene_filter(description)
+    kind = getattr(cam, "type", "perspective")
+    if kind not in CAMERAS:
+        raise ValueError(
+            f"{description.source or 'scene'}: camera type {kind!r}; supported: "
+            f"{', '.join(CAMERAS)}."
+        )
+    cls = CAMERAS[kind]
+    to_world = np.asarray(cam.to_world, np.float64)
+    w = description.film.width if width is None else width
+    h = description.film.height if height is None else height
+    clip = {"near_clip": cam.near_clip, "far_clip": cam.far_clip}
+    if cls is OrthographicCamera:
+        return cls.from_to_world(to_world, w, h, **clip)
+    if cls is ThinLensCamera:
+        return cls.from_to_world(
+            to_world, float(cam.fov_deg), w, h, cam.aperture_radius, cam.focus_distance,
+            cam.fov_axis, **clip,
+        )  # fmt: skip
+    return cls.from_to_world(to_world, float(cam.fov_deg), w, h, cam.fov_axis, **clip)
 
 
 def _surface_attributes(description: SceneDescription) -> dict:

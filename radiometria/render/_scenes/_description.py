@@ -181,9 +181,15 @@ class CameraDescription:
     - `fov_deg`: field of view along `fov_axis`. [degrees]
     - `fov_axis`: `"x"`, `"y"`, `"diagonal"`, `"smaller"` or `"larger"` (Mitsuba's names).
     - `near_clip`, `far_clip`: clip distances. [scene length unit]
+    - `type`: the camera model, a name of `radiometria.render._registry.CAMERAS`:
+        `"perspective"` (pinhole), `"thinlens"` or `"orthographic"` (which ignores `fov_deg`;
+        the scale of `to_world` sets its imaged extent). Mitsuba's sensor names.
+    - `aperture_radius`, `focus_distance`: the thin lens's radius and distance of the plane
+        in focus (`"thinlens"` only). [scene length unit]
 
     !!! note "Thesis"
-        Section 2.3.1 (pinhole camera model); Mitsuba's `perspective` sensor (`Jakob2022`).
+        Section 2.3.1 (pinhole camera model); Mitsuba's `perspective`, `thinlens` and
+        `orthographic` sensors (`Jakob2022`).
     """
 
     to_world: np.ndarray
@@ -191,6 +197,9 @@ class CameraDescription:
     fov_axis: str = "x"
     near_clip: float = 1e-2
     far_clip: float = 1e4
+    type: str = "perspective"
+    aperture_radius: float = 0.0
+    focus_distance: float = 1e4
 
     @property
     def origin(self) -> np.ndarray:
