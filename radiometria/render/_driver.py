@@ -86,6 +86,13 @@ _MAX_PIXELS = 2**31 - 2**20  # pixel indices are int32
 _FILM_BYTES_PER_PIXEL = 4 * 4 * 3  # float32 sums (H, W, 4), the developed image, a host copy
 
 
+def _camera_dimensions(camera: AbstractCamera) -> int:
+    """Sampler dimensions of the camera: 4, and 4 more ([aperture u, aperture v, unused,
+    unused], a stratified pair) for a camera with a lens; the integrator's follow."""
+    extra = int(getattr(camera, "APERTURE_VARIATES", 0))
+    return CAMERA_DIMENSIONS + 4 * -(-extra // 4)
+
+
 def _read_int(path: str) -> int | None:
     try:
         with open(path) as f:
@@ -198,12 +205,13 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     passes = jnp.tile(pass_start + jnp.arange(k, dtype=jnp.int32), t)
     seed = sampler_seed(key)
     sample = functools.partial(kernel.sampler.sample, seed, dtype=dtype)
-    u = sample(pix, passes, 0, CAMERA_DIMENSIONS)
+    camera_dims = _camera_dimensions(kernel.camera)
+    u = sample(pix, passes, 0, camera_dims)
 
     def variates(first, n_dims, paths):
         # the integrator's dimensions follow the camera's
         paths = jnp.minimum(paths, t * k - 1)
-        return sample(pix[paths], passes[paths], CAMERA_DIMENSIONS + first, n_dims)
+        return sample(pix[paths], passes[paths], camera_dims + first, n_dims)
 
     corner = jnp.stack([pix % cfg.width, pix // cfg.width], axis=-1).astype(dtype)
     if cfg.reconstruction == "importance":
@@ -214,7 +222,9 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         # Splatting (eq. 2.34): uniform positions in the pixel, filter weights below.
         raster = corner + u[:, 0:2]
         weight = jnp.ones((t * k,), dtype)
-    origins, directions = kernel.camera.generate_ray(raster)
+    n_aperture = int(getattr(kernel.camera, "APERTURE_VARIATES", 0))
+    aperture = u[:, CAMERA_DIMENSIONS : CAMERA_DIMENSIONS + n_aperture] if n_aperture else None
+    origins, directions = kernel.camera.sample_ray(raster, aperture)
     wavelength_nm, pdf = sample_hero_wavelengths(u[:, 2])
     active = jnp.repeat(valid_pixel, k) & (passes < spp)
     radiance = kernel.integrator.radiance(
