@@ -32,7 +32,7 @@ import numpy as np
 
 from .._checks import as_float_array, check_choice, check_last_axis, check_positive_int
 from .._types import Array, ArrayLike, Float
-from ._base import AbstractCamera
+from ._base import AbstractCamera, CameraWiSample
 
 FOV_AXES = ("x", "y", "diagonal", "smaller", "larger")
 
@@ -436,6 +436,75 @@ class PinholeCamera(AbstractCamera):
             Eq. 2.30.
         """
         return project(self, points_world)
+
+    def importance(self, cos_theta: ArrayLike) -> Array:
+        r"""The importance $W_e = 1 / (A \cos^4\theta)$ of a ray leaving the pinhole at angle
+        $\theta$ to the optical axis, inside the field of view (pbrt's `PerspectiveCamera::We`
+        with a pinhole: lens area 1), where $A = 4 \tan\frac{\mathrm{fov}_x}{2}
+        \tan\frac{\mathrm{fov}_y}{2}$ is the film's area at unit distance. Its integral
+        $\int W_e \cos\theta\, d\omega$ over the film's solid angle is 1, so a film position
+        drawn uniformly (what `generate_ray` with uniform raster positions does) has the density
+        $W_e \cos\theta$ per unit solid angle. [sr^-1]
+
+        !!! note "Thesis"
+            Section 2.3.1 (the camera as a measurement).
+
+        ??? cite "References"
+            `Pharr2023` §5.2.4 (importance of a perspective camera); `Veach1997` §10.2.
+        """
+        cos_theta = jnp.asarray(cos_theta)
+        tan_x, tan_y = self.tan_half_fov()
+        area = (4.0 * tan_x * tan_y).astype(cos_theta.dtype)
+        c2 = cos_theta * cos_theta
+        ok = cos_theta > 0
+        return jnp.where(ok, 1.0 / (area * jnp.where(ok, c2 * c2, 1.0)), 0.0)
+
+    def sample_wi(self, p: ArrayLike) -> CameraWiSample:
+        r"""Connect scene points to the pinhole (light tracing; pbrt's
+        `PerspectiveCamera::SampleWi` with a pinhole).
+
+        **Arguments:**
+
+        - `p`: scene points `(n, 3)`. [scene units]
+
+        **Returns:**
+
+        A `CameraWiSample`: the unit direction `wi` and distance to the pinhole, the importance
+        `importance(cos_theta)` [sr^-1] of the ray through `p`, the density $d^2/\cos\theta$
+        of the (fixed) pinhole per unit solid angle at `p` [sr^-1], the raster position of
+        `p` (`project`) [px], and `valid` where `p` lies in front of the camera and its image
+        on the film $[0, W) \times [0, H)$.
+
+        !!! note "Thesis"
+            Section 2.3.1.
+
+        ??? cite "References"
+            `Pharr2023` §5.2.4; `Veach1997` §10.2.
+        """
+        p = jnp.asarray(p)
+        dtype = p.dtype
+        eye = self.to_world[:3, 3].astype(dtype)
+        forward = self.to_world[:3, 2].astype(dtype)
+        forward = forward / jnp.sqrt(jnp.sum(forward * forward))
+        to_eye = eye - p
+        dist = jnp.sqrt(jnp.sum(to_eye * to_eye, axis=-1))
+        ok = dist > 0
+        wi = to_eye / jnp.where(ok, dist, 1.0)[..., None]
+        cos_theta = -jnp.sum(wi * forward, axis=-1)
+        raster = project(self, p)
+        x, y = raster[..., 0], raster[..., 1]
+        on_film = (x >= 0) & (x < self.width) & (y >= 0) & (y < self.height)  # False for NaN
+        valid = ok & (cos_theta > 0) & on_film
+        raster = jnp.where(valid[..., None], raster, 0.0)
+        cos_safe = jnp.where(valid, cos_theta, 1.0)
+        return CameraWiSample(
+            wi=wi,
+            dist=dist,
+            importance=jnp.where(valid, self.importance(cos_safe), 0.0),
+            pdf=jnp.where(valid, dist * dist / cos_safe, 0.0),
+            raster=raster,
+            valid=valid,
+        )
 
 
 def generate_ray(

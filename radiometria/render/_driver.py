@@ -227,6 +227,8 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     origins, directions = kernel.camera.sample_ray(raster, aperture)
     wavelength_nm, pdf = sample_hero_wavelengths(u[:, 2])
     active = jnp.repeat(valid_pixel, k) & (passes < spp)
+    if _splats_only(kernel.integrator):
+        return _trace_splats(kernel, pix, wavelength_nm, pdf, variates, active, cfg=cfg)
     radiance = kernel.integrator.radiance(
         kernel.scene,
         origins.astype(dtype),
@@ -248,6 +250,75 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
     f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
     return jnp.einsum("tkj,tki,tkc->tjic", f1[..., 1], f1[..., 0], values)
+
+
+def _splats_only(integrator) -> bool:
+    """The integrator estimates nothing per camera ray and splats everything (`PTracer`)."""
+    return bool(getattr(integrator, "SPLATS_ONLY", False))
+
+
+def _film_filter_integral(rfilter, centre, size: int):
+    r"""$\int_0^{size} f_1(x - c)\,dx$ for pixel centres `c` [px]: the 1D filter's integral
+    over the film (midpoint rule on 512 cells; exact for the box filter)."""
+    r = float(rfilter.radius)
+    cells = 512
+    h = 2.0 * r / cells
+    x = -r + h * (jnp.arange(cells, dtype=centre.dtype) + 0.5)
+    fx = rfilter.evaluate_1d(x).astype(centre.dtype) * h
+    pos = centre[:, None] + x[None, :]
+    inside = (pos >= 0) & (pos < size)
+    return jnp.sum(jnp.where(inside, fx[None, :], 0.0), axis=-1)
+
+
+def _trace_splats(kernel: _Kernel, pix, wavelength_nm, pdf, variates, active, *, cfg: _Config):
+    r"""A splatting integrator's part of a step (`PTracer`): one light path per (pixel, pass)
+    slot, its vertices' splats as XYZ, and per pixel the weight $F_j$ per active slot, so that
+    the film's division by its weight sums gives pbrt's $1/\mathrm{spp}$ splat scale over the
+    filter's integral $F_j$ (`radiometria.render._integrators._ptracer`, "Normalisation").
+
+    Returns `(footprints (t, 1, 1, 4), raster (m, 2), xyz (m, 3))`, `m` = vertices x paths.
+    """
+    dtype = jnp.float32
+    t, k = pix.shape[0] // cfg.passes, cfg.passes
+    sp = kernel.integrator.splats(
+        kernel.scene, kernel.camera, wavelength_nm.astype(dtype), variates, active
+    )
+    xyz = film_samples_to_XYZ(kernel.response, sp.value, wavelength_nm[None], pdf[None])
+    ok = sp.valid & jnp.all(jnp.isfinite(xyz), axis=-1)
+    xyz = jnp.where(ok[..., None], xyz, 0.0).astype(dtype).reshape(-1, 3)
+    raster = jnp.where(ok[..., None], sp.raster, -1.0).astype(dtype).reshape(-1, 2)
+    height = cfg.n_pixels // cfg.width
+    cx = (pix % cfg.width).astype(dtype) + 0.5
+    cy = (pix // cfg.width).astype(dtype) + 0.5
+    f = _film_filter_integral(kernel.rfilter, cx, cfg.width)
+    f = f * _film_filter_integral(kernel.rfilter, cy, height)
+    w = jnp.sum(jnp.where(active, f, 0.0).reshape(t, k), axis=1)
+    footprints = jnp.zeros((t, 1, 1, 4), dtype).at[:, 0, 0, 3].set(w)
+    return footprints, raster, xyz
+
+
+def _add_splats(film: Film, raster, xyz, rfilter, width: int, height: int) -> Film:
+    r"""Scatter-add splats `xyz (m, 3)` at raster positions `(m, 2)` [px] into the film's XYZ
+    sums, each into every pixel within the filter's radius with weight $f$ (no weight sum:
+    `_trace_splats` gives the normalisation). Positions outside the film are dropped. On CPUs
+    the scatter-add runs in a fixed order: the image is deterministic for a seed."""
+    radius = max(math.ceil(float(rfilter.radius) + 0.5) - 1, 0)
+    d = jnp.arange(-radius, radius + 1, dtype=jnp.int32)
+    base = jnp.floor(raster).astype(jnp.int32)  # (m, 2)
+    px = base[:, None, 0] + d[None, :]  # (m, F)
+    py = base[:, None, 1] + d[None, :]
+    fx = rfilter.evaluate_1d(px.astype(raster.dtype) + 0.5 - raster[:, 0:1]).astype(xyz.dtype)
+    fy = rfilter.evaluate_1d(py.astype(raster.dtype) + 0.5 - raster[:, 1:2]).astype(xyz.dtype)
+    weight = fy[:, :, None] * fx[:, None, :]  # (m, F, F)
+    inside = (
+        ((px >= 0) & (px < width))[:, None, :]
+        & ((py >= 0) & (py < height))[:, :, None]
+        & (raster[:, 0] >= 0)[:, None, None]
+    )
+    idx = jnp.where(inside, py[:, :, None] * width + px[:, None, :], width * height)
+    values = (weight[..., None] * xyz[:, None, None, :]).reshape(-1, 3)
+    xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx.reshape(-1)].add(values, mode="drop")
+    return eqx.tree_at(lambda f: f.xyz_sum, film, xyz_sum.reshape(film.xyz_sum.shape))
 
 
 def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> Film:
@@ -611,14 +682,18 @@ def _step(film, kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     taking its share of the tile's pixels; their results are then added to the film (replicated
     accumulators), which gathers them from the devices.
     """
+    splats = _splats_only(kernel.integrator)
     trace = jax.shard_map(
         functools.partial(_trace, cfg=cfg),
         mesh=Mesh(np.asarray(cfg.devices), ("pixels",)),
         in_specs=(P(), P(), P(), P(), P("pixels")),
-        out_specs=P("pixels"),
+        out_specs=(P("pixels"),) * 3 if splats else P("pixels"),
         check_vma=False,
     )
     footprints = trace(kernel, key, spp, pass_start, pixel)
+    if splats:  # the devices' splats in device order, then the per-pixel weights
+        footprints, raster, xyz = footprints
+        film = _add_splats(film, raster, xyz, kernel.rfilter, cfg.width, film.height)
     return _add_footprints(film, pixel, footprints, cfg.width, film.height)
 
 

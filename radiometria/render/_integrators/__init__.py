@@ -11,6 +11,11 @@ from ._path import (
     path_radiance as path_radiance,
     sample_dimensions as sample_dimensions,
 )
+from ._ptracer import (
+    PTracer as PTracer,
+    Splats as Splats,
+    ptracer_sample_dimensions as ptracer_sample_dimensions,
+)
 from ._volpath import (
     VolPath as VolPath,
     volpath_radiance as volpath_radiance,

@@ -8,7 +8,11 @@ use are in `radiometria.render._registry.LIGHTS`.
 """
 
 from ._area import AreaLight as AreaLight
-from ._base import AbstractLight as AbstractLight, LightSample as LightSample
+from ._base import (
+    AbstractLight as AbstractLight,
+    EmissionSample as EmissionSample,
+    LightSample as LightSample,
+)
 from ._constant import ConstantLight as ConstantLight
 from ._directional import DirectionalLight as DirectionalLight
 from ._envmap import EnvironmentLight as EnvironmentLight, read_envmap as read_envmap

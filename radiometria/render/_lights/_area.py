@@ -7,11 +7,13 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
-from ...montecarlo import sample_uniform_triangle
+from ..._math import dot
+from ...montecarlo import sample_cosine_hemisphere, sample_uniform_triangle
+from ...scattering import coordinate_system
 from ...upsampling import RGBIlluminantSpectrum
 from .._spectral import SpectrumTable
 from .._textures import AbstractTexture, ConstantTexture
-from ._base import AbstractLight, LightSample
+from ._base import AbstractLight, EmissionSample, LightSample
 
 
 class AreaLight(AbstractLight):
@@ -184,3 +186,39 @@ class AreaLight(AbstractLight):
         pdf = self.pdf_li(lf, dist, cos_light)
         le = self.radiance(jnp.maximum(self.face_emitter[lf], 0), wavelength_nm)
         return LightSample(wi=wi, dist=dist, radiance=le, pdf=pdf)
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray: a triangle by power x area, a uniform point on it and a
+        cosine-weighted direction on its front side (a two-sided emitter: either side, each
+        with probability 1/2, chosen by `u_side`), so the throughput is
+        $L_e \\pi / p_A$ (twice that for two-sided emitters)."""
+        dtype = observer.dtype
+        method = "compare_all" if self.light_cdf.shape[0] <= 64 else "scan_unrolled"
+        j = jnp.searchsorted(self.light_cdf, u_select, side="right", method=method)
+        j = jnp.clip(j, 0, self.light_face.shape[0] - 1)
+        lf = self.light_face[j]
+        bary = sample_uniform_triangle(u_pos, check=False).astype(dtype)
+        p = self.p0[j] + bary[:, 1:2] * self.e1[j] + bary[:, 2:3] * self.e2[j]
+        emitter = jnp.maximum(self.face_emitter[lf], 0)
+        two_sided = self.two_sided[emitter]
+        flip = two_sided & (u_side >= 0.5)
+        n = jnp.where(flip[:, None], -self.normal[j], self.normal[j])
+        s, t = coordinate_system(n)
+        local = sample_cosine_hemisphere(u_dir, check=False).astype(dtype)
+        d = local[:, 0:1] * s + local[:, 1:2] * t + local[:, 2:3] * n
+        d = d / jnp.sqrt(dot(d, d))[:, None]
+        pdf_dir = local[:, 2] / jnp.pi * jnp.where(two_sided, 0.5, 1.0)
+        le = self.radiance(emitter, wavelength_nm)
+        to_obs = observer - p
+        cos_obs = jnp.sum(self.normal[j] * to_obs, axis=-1)
+        facing = (cos_obs > 0) | (two_sided & (cos_obs != 0))
+        return EmissionSample(
+            p=p,
+            n=n,
+            d=d,
+            le=le,
+            pdf_pos=self.light_pdf_area[lf],
+            pdf_dir=pdf_dir,
+            le_observer=jnp.where(facing[:, None], le, 0.0),
+            delta_pos=jnp.zeros(pdf_dir.shape, bool),
+        )

@@ -7,6 +7,8 @@ from typing import ClassVar
 import equinox as eqx
 from jaxtyping import Array, Bool, Float, Int
 
+__all__ = ["AbstractLight", "EmissionSample", "LightSample"]
+
 
 class LightSample(eqx.Module):
     """A sampled point or direction on a light, seen from a shading point (arrays `(n, ...)`).
@@ -35,6 +37,42 @@ class LightSample(eqx.Module):
     radiance: Float[Array, "n k"]
     pdf: Float[Array, " n"]
     delta: Bool[Array, " n"] | None = None
+
+
+class EmissionSample(eqx.Module):
+    r"""A sampled emitted ray, the start of a light path (pbrt's `SampleLe`; arrays `(n, ...)`).
+
+    **Fields:**
+
+    - `p`: the point on the light `(n, 3)`. [scene units]
+    - `n`: the light's unit surface normal at `p` `(n, 3)`, on the emitting side; zero for
+        lights without a surface (point, spot).
+    - `d`: unit direction of the emitted ray `(n, 3)`.
+    - `le`: what leaves `p` along `d`, `(n, k)`: radiance for area lights, intensity for
+        point and spot lights. [W m^-2 sr^-1 nm^-1, or W sr^-1 nm^-1]
+    - `pdf_pos`: density of `p`, the light's pick probability included: per unit area, or
+        the discrete probability for a light without a surface. [m^-2, or 1]
+    - `pdf_dir`: solid-angle density of `d` given `p`. [sr^-1]
+    - `le_observer`: what leaves `p` towards the `observer` point given to `sample_le`
+        (the camera's lens point), `(n, k)`, same unit as `le`.
+    - `delta_pos`: `(n,)` bool: `p` is a delta position (point, spot), so no cosine factor
+        at the light and no surface to hit.
+
+    The light path's initial throughput is `le |n . d| / (pdf_pos pdf_dir)` (no cosine for
+    `delta_pos`), and 0 marks a failed sample (`pdf_pos = 0`).
+
+    ??? cite "References"
+        `Pharr2023` §12.1 (`LightLeSample`); `Veach1997` §10.2 (light tracing).
+    """
+
+    p: Float[Array, "n 3"]
+    n: Float[Array, "n 3"]
+    d: Float[Array, "n 3"]
+    le: Float[Array, "n k"]
+    pdf_pos: Float[Array, " n"]
+    pdf_dir: Float[Array, " n"]
+    le_observer: Float[Array, "n k"]
+    delta_pos: Bool[Array, " n"]
 
 
 class AbstractLight(eqx.Module):
@@ -109,6 +147,24 @@ class AbstractLight(eqx.Module):
     def pdf_escaped(self, directions: Float[Array, "n 3"]) -> Float[Array, " n"]:
         """Solid-angle density [sr^-1] with which `sample_li` picks the unit direction
         `directions` towards a light at infinity (0 for lights that are not at infinity)."""
+
+    def sample_le(
+        self,
+        u_select: Float[Array, " n"],
+        u_pos: Float[Array, "n 2"],
+        u_dir: Float[Array, "n 2"],
+        u_side: Float[Array, " n"],
+        observer: Float[Array, "n 3"],
+        wavelength_nm: Float[Array, "n k"],
+    ) -> EmissionSample:
+        """Sample an emitted ray (light tracing): a light by power (`u_select`), a point on it
+        (`u_pos`), a direction (`u_dir`; `u_side` picks the side of a two-sided emitter), and
+        the emission towards the points `observer` [scene units] as well. Lights that cannot
+        start light paths yet (directional, constant, envmap) raise `ValueError`."""
+        raise ValueError(
+            f"the {getattr(self, 'NAME', type(self).__name__)!r} light cannot start light "
+            "paths yet (light tracing supports the 'area', 'point' and 'spot' emitters)."
+        )
 
     @abc.abstractmethod
     def power(self, scene_radius: float) -> float:

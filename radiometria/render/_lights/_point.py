@@ -8,8 +8,9 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..._math import dot
+from ...montecarlo import sample_uniform_sphere
 from .._spectral import SpectrumTable
-from ._base import AbstractLight, LightSample
+from ._base import AbstractLight, EmissionSample, LightSample
 from ._common import (
     illuminant_table,
     pick_row,
@@ -106,3 +107,21 @@ class PointLight(AbstractLight):
 
     def power(self, scene_radius: float) -> float:
         return self.phi
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray: a light by power, a uniform direction on the sphere
+        (density $1/4\\pi$); the throughput is $4\\pi I / P_j$."""
+        j, prob, _ = pick_row(self.cdf, u_select)
+        dtype = observer.dtype
+        d = sample_uniform_sphere(u_dir, check=False).astype(dtype)
+        le = self.intensity(j, wavelength_nm)
+        return EmissionSample(
+            p=self.position[j],
+            n=jnp.zeros_like(d),
+            d=d,
+            le=le,
+            pdf_pos=prob,
+            pdf_dir=jnp.full(prob.shape, 1.0 / (4.0 * jnp.pi), dtype),
+            le_observer=le,
+            delta_pos=jnp.ones(prob.shape, bool),
+        )

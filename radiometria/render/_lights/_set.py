@@ -3,6 +3,7 @@
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
@@ -118,6 +119,24 @@ class LightSet(AbstractLight):
         return LightSample(
             wi=out.wi, dist=out.dist, radiance=out.radiance, pdf=out.pdf * prob, delta=out.delta
         )
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray from the plugin picked by power (probability $P_j$, which scales
+        `pdf_pos`); every plugin must support `sample_le` (else `ValueError`)."""
+        j, prob, u_light = pick_row(self.cdf, u_select)
+        out = None
+        for i, light in enumerate(self.lights):
+            s = light.sample_le(u_light, u_pos, u_dir, u_side, observer, wavelength_nm)
+            if out is None:
+                out = s
+                continue
+            mine = j == i
+            out = jax.tree.map(
+                lambda a, b, m=mine: jnp.where(m.reshape(m.shape + (1,) * (a.ndim - 1)), a, b),
+                s,
+                out,
+            )
+        return eqx.tree_at(lambda e: e.pdf_pos, out, out.pdf_pos * prob)
 
     def pdf_li(self, face, dist, cos_light):
         if self.area_index < 0:

@@ -8,8 +8,9 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..._math import dot
+from ...montecarlo import sample_uniform_cone
 from .._spectral import SpectrumTable
-from ._base import AbstractLight, LightSample
+from ._base import AbstractLight, EmissionSample, LightSample
 from ._common import illuminant_table, pick_row, row_cdf, spectral_param, to_world_param
 
 
@@ -153,3 +154,33 @@ class SpotLight(AbstractLight):
 
     def power(self, scene_radius: float) -> float:
         return self.phi
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray: a spot by power, a uniform direction in its cutoff cone (density
+        $1 / 2\\pi(1 - \\cos\\theta_c)$); the throughput is $I f(\\theta)$ over both
+        densities."""
+        j, prob, _ = pick_row(self.cdf, u_select)
+        dtype = observer.dtype
+        cos_max = jnp.cos(self.cutoff[j])
+        local = sample_uniform_cone(u_dir, cos_max, check=False).astype(dtype)
+        to_world = jnp.linalg.inv(self.world_to_local[j])
+        d = jnp.einsum("nij,nj->ni", to_world, local)
+        d = d / jnp.sqrt(dot(d, d))[:, None]
+        intensity = self.intensity(j, wavelength_nm)
+
+        def falloff(w):
+            loc = jnp.einsum("nij,nj->ni", self.world_to_local[j], w)
+            cos = loc[:, 2] / jnp.sqrt(jnp.maximum(dot(loc, loc), 1e-30))
+            return spot_falloff(cos, self.cutoff[j], self.beam_width[j])
+
+        to_obs = observer - self.position[j]
+        return EmissionSample(
+            p=self.position[j],
+            n=jnp.zeros_like(d),
+            d=d,
+            le=intensity * falloff(d)[:, None],
+            pdf_pos=prob,
+            pdf_dir=1.0 / (2.0 * jnp.pi * (1.0 - cos_max)),
+            le_observer=intensity * falloff(to_obs)[:, None],
+            delta_pos=jnp.ones(prob.shape, bool),
+        )
