@@ -30,8 +30,11 @@ from ._materials import (
     Dielectric,
     Diffuse,
     OrenNayar,
+    Plastic,
     RoughConductor,
     RoughDielectric,
+    RoughPlastic,
+    ThinDielectric,
 )
 from ._materials._null import Null
 from ._media import GridMediumPlugin, HomogeneousMediumPlugin
@@ -57,8 +60,9 @@ def _by_name(*plugins) -> dict:
 
 # Mitsuba 3's `<bsdf type=...>` names.
 MATERIALS = _by_name(
-    Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null
-)
+    Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null,
+    Plastic, RoughPlastic, ThinDielectric,
+)  # fmt: skip
 # Mitsuba 3's `<emitter type=...>` names.
 LIGHTS = _by_name(
     AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvironmentLight

@@ -12,6 +12,8 @@ from ._dielectric import Dielectric as Dielectric
 from ._diffuse import Diffuse as Diffuse
 from ._ior import MITSUBA_IOR as MITSUBA_IOR
 from ._oren_nayar import OrenNayar as OrenNayar
+from ._plastic import Plastic as Plastic, RoughPlastic as RoughPlastic
 from ._rough_conductor import RoughConductor as RoughConductor
 from ._rough_dielectric import RoughDielectric as RoughDielectric
 from ._set import MaterialSet as MaterialSet
+from ._thin_dielectric import ThinDielectric as ThinDielectric

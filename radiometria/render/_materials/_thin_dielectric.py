@@ -1,0 +1,53 @@
+"""Mitsuba's `thindielectric` BSDF: a thin non-absorbing slab (window panes, soap films)."""
+
+from typing import ClassVar
+
+import jax.numpy as jnp
+from jaxtyping import Array, Bool, Float, Int
+
+from ...scattering import ThinDielectricBxDF
+from .._textures import AbstractTexture
+from ._base import AbstractMaterial, Properties, unknown_parameters
+from ._dielectric import dielectric_textures
+
+
+class ThinDielectric(AbstractMaterial):
+    """Thin dielectric slabs (Mitsuba's `thindielectric`): reflectance summed over the
+    slab's internal reflections, $R' = R + T^2R/(1 - R^2)$, and straight-through transmission
+    (`radiometria.scattering.ThinDielectricBxDF`).
+
+    **Fields:**
+
+    - `eta`: texture of `int_ior / ext_ior` (Mitsuba's defaults: BK7 in air). [1]
+    - `specular_reflectance`, `specular_transmittance`: textures of factors on the two lobes
+        (default 1). [1]
+    - `two_sided`: `(m,)` bool (both sides always scatter).
+
+    !!! note "Thesis"
+        Section 3.1.1, eq. 3.13-3.18.
+
+    ??? cite "References"
+        `Jakob2022` (`thindielectric`).
+    """
+
+    NAME: ClassVar[str] = "thindielectric"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
+        {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
+    )
+    TRANSMISSIVE: ClassVar[bool] = True
+    eta: AbstractTexture
+    specular_reflectance: AbstractTexture
+    specular_transmittance: AbstractTexture
+    two_sided: Bool[Array, " m"]
+
+    @classmethod
+    def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
+        unknown_parameters(params, cls, where)
+        return cls(*dielectric_textures(params, where), jnp.asarray([True], bool))
+
+    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]):
+        return ThinDielectricBxDF(
+            jnp.maximum(self.eta(row, wavelength_nm), 1e-3),
+            self.specular_reflectance(row, wavelength_nm),
+            self.specular_transmittance(row, wavelength_nm),
+        )
