@@ -483,9 +483,9 @@ class PinholeCamera(AbstractCamera):
         """
         p = jnp.asarray(p)
         dtype = p.dtype
-        eye = self.to_world[:3, 3].astype(dtype)
+        eye = jnp.broadcast_to(self.to_world[:3, 3].astype(dtype), p.shape)
         forward = self.to_world[:3, 2].astype(dtype)
-        forward = forward / jnp.sqrt(jnp.sum(forward * forward))
+        forward = jnp.broadcast_to(forward / jnp.sqrt(jnp.sum(forward * forward)), p.shape)
         to_eye = eye - p
         dist = jnp.sqrt(jnp.sum(to_eye * to_eye, axis=-1))
         ok = dist > 0

@@ -91,9 +91,9 @@ class Splats(eqx.Module):
     - `valid`: `(V, n)` bool.
     """
 
-    raster: Float[Array, "V n 2"]
-    value: Float[Array, "V n k"]
-    valid: Bool[Array, "V n"]
+    raster: Float[Array, "*v n 2"]
+    value: Float[Array, "*v n k"]
+    valid: Bool[Array, "*v n"]
 
 
 class PTracer(AbstractIntegrator):
@@ -207,7 +207,9 @@ class PTracer(AbstractIntegrator):
         o = jnp.where(has_n[:, None], _offset(es.p, es.n, es.d, offset), es.p)
         state = (
             jnp.where(ok[:, None], o, 0.0),
-            jnp.where(ok[:, None], es.d, jnp.asarray([0.0, 0.0, 1.0], dtype)),
+            jnp.where(
+                ok[:, None], es.d, jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), es.d.shape)
+            ),
             beta,
             ok,
             jnp.zeros((n,), bool),  # hero wavelength only (dispersion)
@@ -262,7 +264,9 @@ class PTracer(AbstractIntegrator):
             hero_only = hero_only | (alive & bs.terminate_secondary)
             o = _offset(v.p, v.n, wi, scale_of(v.p))
             o = jnp.where(alive[:, None], o, 0.0)
-            wi = jnp.where(alive[:, None], wi, jnp.asarray([0.0, 0.0, 1.0], dtype))
+            wi = jnp.where(
+                alive[:, None], wi, jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), wi.shape)
+            )
             return (o, wi, beta, alive, hero_only), splat
 
         if self.max_depth == 1:

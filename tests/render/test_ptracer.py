@@ -1,0 +1,115 @@
+"""Light tracing (`ptracer`): closed forms and agreement with the path tracer (issue 14)."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from radiometria.camera import BoxFilter, PinholeCamera
+from radiometria.montecarlo import pixel_z_test
+from radiometria.render import Path, RenderScene, render
+from radiometria.render._integrators import PTracer
+
+from ._synthetic import constant_table, quad
+
+LE = 2.0  # constant emitted spectral radiance: Y = LE
+
+
+def _wall_scene_and_camera(size=8):
+    """A camera at the origin looking along +z at an emitting quad at z = 2 that exactly
+    fills its (square, 60 degree) field of view, the quad's normal towards the camera."""
+    h = 2.0 * np.tan(np.radians(30.0))
+    v, f = quad([[-h, -h, 2.0], [-h, h, 2.0], [h, h, 2.0], [h, -h, 2.0]])
+    scene = RenderScene.from_triangles(
+        v, f, np.zeros(2, int), constant_table(0.0), np.zeros(2, int), constant_table(LE)
+    )
+    normal = np.asarray(scene.normal[0])
+    assert normal[2] < 0  # faces the camera
+    camera = PinholeCamera.from_look_at(
+        np.array([0.0, 0, 0]), np.array([0.0, 0, 1]), np.array([0.0, 1, 0]), 60.0, size, size
+    )
+    return scene, camera
+
+
+def test_ptracer_emitter_seen_directly_closed_form():
+    # Every light path's depth-0 splat carries L cos_l W_e cos_c / (d^2 p_A), which for a
+    # plane facing the camera is the same for all points: the image sum is exact, and each
+    # pixel's value is L times its share of the hits over its expected share (binomial),
+    # up to the hero wavelengths' noise.
+    scene, camera = _wall_scene_and_camera()
+    spp = 64
+    image = np.asarray(
+        render(scene, camera=camera, spp=spp, integrator=PTracer(max_depth=1),
+               rfilter=BoxFilter(), return_xyz=True, progress=False)
+    )  # fmt: skip
+    y = image[..., 1]
+    np.testing.assert_allclose(y.mean(), LE, rtol=2e-3)
+    # n_j ~ Binomial(N, 1/64) with mean spp = 64, sd 8: 7 sd is 0.875 of the mean
+    assert np.all(np.abs(y / LE - 1.0) < 7 * 8 / 64)
+    assert y.std() > 0  # light tracing is noisy here, unlike the path tracer
+    path = np.asarray(
+        render(scene, camera=camera, spp=4, integrator=Path(max_depth=1), rfilter=BoxFilter(),
+               return_xyz=True, progress=False)
+    )  # fmt: skip
+    # (hero-wavelength noise only: Y = L in expectation)
+    np.testing.assert_allclose(path[..., 1].mean(), LE, rtol=1e-2)
+    np.testing.assert_allclose(path[..., 1], LE, rtol=0.1)
+
+
+def test_ptracer_hide_emitters_and_bad_parameters():
+    scene, camera = _wall_scene_and_camera(size=4)
+    image = render(scene, camera=camera, spp=2, integrator=PTracer(max_depth=1, hide_emitters=True),
+                   progress=False)  # fmt: skip
+    assert float(jnp.max(jnp.abs(image))) == 0.0
+    with pytest.raises(ValueError, match="max_depth"):
+        PTracer(max_depth=0)
+    with pytest.raises(ValueError, match="unknown ptracer parameter"):
+        PTracer.from_properties({"max_depht": 3}, where="scene.xml")
+    assert PTracer.from_properties({"max_depth": -1, "hide_emitters": True}).hide_emitters
+
+
+def test_pinhole_importance_integrates_to_one():
+    # int W_e cos dw over the film = 1: as the sum over a fine raster grid of the solid angle
+    # of each cell (cos^3 / (d^2) dA on the plane at unit depth) times W_e cos.
+    camera = PinholeCamera.from_look_at(
+        np.array([0.0, 0, 0]), np.array([0.0, 0, 1]), np.array([0.0, 1, 0]), 50.0, 12, 8
+    )
+    n = 240
+    x = (np.arange(n * 12 // 8 * 1) + 0.5) / (n * 12 // 8) * 12
+    y = (np.arange(n) + 0.5) / n * 8
+    raster = np.stack(np.meshgrid(x, y), axis=-1).reshape(-1, 2)
+    o, d = camera.generate_ray(jnp.asarray(raster))
+    s = camera.sample_wi(o + 3.0 * d)
+    assert bool(jnp.all(s.valid))
+    np.testing.assert_allclose(np.asarray(s.raster), raster, atol=1e-6)
+    cos = np.asarray(d[:, 2])
+    tan_x, tan_y = (float(t) for t in camera.tan_half_fov())
+    cell = (2 * tan_x / x.size) * (2 * tan_y / y.size)  # area on the plane z = 1
+    total = np.sum(np.asarray(s.importance) * cos * cos**3 * cell)
+    np.testing.assert_allclose(total, 1.0, rtol=1e-6)
+    # the pinhole's density per solid angle at the point: d^2 / cos
+    np.testing.assert_allclose(np.asarray(s.pdf), 9.0 / cos, rtol=1e-6)
+
+
+def _moments(integrator, seeds, spp, size, max_depth):
+    images = np.stack([
+        np.asarray(render("cornell-box", spp=spp, width=size, height=size, seed=s,
+                          integrator=integrator, return_xyz=True, progress=False))
+        for s in seeds
+    ])  # fmt: skip
+    return images.mean(axis=0), images.var(axis=0, ddof=1) / len(seeds)
+
+
+@pytest.mark.slow
+def test_ptracer_agrees_with_path_on_cornell_box():
+    # Both estimates of the filtered pixel values (Gaussian filter, splatting) by independent
+    # renders; the z-test's variance is that of the difference of the two means.
+    size, spp, depth, n = 16, 16, 4, 6
+    pt, var_pt = _moments(PTracer(max_depth=depth), range(n), spp, size, depth)
+    ref, var_ref = _moments(Path(max_depth=depth), range(100, 100 + n), spp, size, depth)
+    total = n * spp
+    result = pixel_z_test(
+        pt, ref, (var_pt + var_ref) * total, total, None, required_fraction=0.99,
+        variance_floor=1e-8,
+    )  # fmt: skip
+    assert result.passed, result.message
+    np.testing.assert_allclose(pt.mean(axis=(0, 1)), ref.mean(axis=(0, 1)), rtol=0.05)
