@@ -74,7 +74,13 @@ from ._integrators import AbstractIntegrator, Path
 from ._registry import INTEGRATORS, SAMPLERS
 from ._render_scene import RenderScene
 from ._samplers import AbstractSampler, Independent, sampler_seed
-from ._scenes import SceneDescription, compile_scene, load_scene, scene_integrator
+from ._scenes import (
+    SceneDescription,
+    compile_scene,
+    load_scene,
+    scene_integrator,
+    scene_sampler,
+)
 from ._spectral import sample_hero_wavelengths
 
 __all__ = ["RECONSTRUCTIONS", "RenderInterrupted", "render"]
@@ -379,8 +385,10 @@ def render(
     - `width`, `height`: image size [px]; default: the scene's film.
     - `integrator`: an `AbstractIntegrator`; default: the one the scene file asks for (its
         `max_depth` and `rr_depth`), else `Path()` (NEE + MIS + Russian roulette, 8 segments).
-    - `sampler`: an `AbstractSampler`; default `Independent()`. `OwenSobol()` (padded
-        Owen-scrambled Sobol) reaches a given error sooner on the Cornell box.
+    - `sampler`: an `AbstractSampler`; default: the one the scene file asks for (Mitsuba's
+        `independent` is `Independent()`; `stratified`, `multijitter`, `ldsampler`, `sobol`
+        are `OwenSobol()`), else `Independent()`. `OwenSobol()` (padded Owen-scrambled
+        Sobol) reaches a given error sooner on the Cornell box.
     - `batch`: paths traced per step (bounds memory); default: about 2^16 per CPU device,
         2^20 per GPU, within the device memory.
     - `progress`: show a tqdm progress bar on stderr.
@@ -439,11 +447,11 @@ def render(
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
         raise TypeError(f"`seed` must be an int, got {type(seed).__name__} {seed!r}.")
     with checks_without_callbacks():  # the loader has checked the values (see _cache.py)
-        scene, camera, rfilter, scene_integrator_ = _resolve_scene(
+        scene, camera, rfilter, scene_integrator_, scene_sampler_ = _resolve_scene(
             scene, camera, rfilter, width, height
         )
     integrator = scene_integrator_ if integrator is None else integrator
-    sampler = Independent() if sampler is None else sampler
+    sampler = scene_sampler_ if sampler is None else sampler
     width, height = int(camera.width), int(camera.height)
     n_pixels = width * height
     if n_pixels > _MAX_PIXELS:
@@ -631,14 +639,16 @@ def _check_plugin(value, name: str, base: type, registry: dict, example: str) ->
 
 
 def _resolve_scene(scene, camera, rfilter, width, height):
-    """(RenderScene, camera, filter, default integrator) from what `render` got."""
+    """(RenderScene, camera, filter, default integrator, default sampler) from what `render`
+    got."""
     if isinstance(scene, str | os.PathLike):
         scene = load_scene(scene)
     if isinstance(scene, SceneDescription):
         if camera is not None:
             raise ValueError("`camera` is for a RenderScene; a loaded scene has its own camera.")
         rs, cam, filt = compile_scene(scene, width=width, height=height)
-        return rs, cam, filt if rfilter is None else rfilter, scene_integrator(scene)
+        filt = filt if rfilter is None else rfilter
+        return rs, cam, filt, scene_integrator(scene), scene_sampler(scene)
     if isinstance(scene, RenderScene):
         if camera is None:
             raise ValueError("Rendering a `RenderScene` needs `camera` (an AbstractCamera).")
@@ -653,7 +663,8 @@ def _resolve_scene(scene, camera, rfilter, width, height):
                     f"`{name}`={value} differs from the camera's {have} [px]; build the camera "
                     "with the image size you want."
                 )
-        return scene, camera, GaussianFilter() if rfilter is None else rfilter, Path()
+        filt = GaussianFilter() if rfilter is None else rfilter
+        return scene, camera, filt, Path(), Independent()
     raise TypeError(
         f"`scene` must be a scene name, a path, a loaded scene or a RenderScene, got "
         f"{type(scene).__name__}."

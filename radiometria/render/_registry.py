@@ -73,6 +73,10 @@ INTEGRATORS = _by_name(Path, Direct, VolPath, PTracer)
 MEDIA = _by_name(HomogeneousMediumPlugin, GridMediumPlugin)
 # `radiometria render --sampler`.
 SAMPLERS = _by_name(Independent, OwenSobol)
+# Mitsuba's stratified and low-discrepancy samplers: Owen-scrambled Sobol points are stratified
+# in every elementary interval of each dimension pair (power-of-two counts), the property
+# `stratified` and `multijitter` have for square counts, and `ldsampler`'s (0, 2)-sequences.
+SAMPLERS.update(stratified=OwenSobol, multijitter=OwenSobol, ldsampler=OwenSobol)
 # Spectral values of scene files are constant textures until textures arrive (scene format).
 TEXTURES = {
     "constant": ConstantTexture,

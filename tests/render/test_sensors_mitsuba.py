@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from radiometria.camera import OrthographicCamera, ThinLensCamera
-from radiometria.render._scenes._compile import scene_camera
+from radiometria.render._scenes._compile import scene_camera, scene_sampler
 from radiometria.render._scenes._description import SceneError
 from radiometria.render._scenes._mitsuba_xml import load_mitsuba_xml
 
@@ -115,3 +115,40 @@ def test_loader_rejects_bad_sensors(tmp_path, sensor, match):
     with pytest.raises(SceneError, match=match) as err:
         load_mitsuba_xml(path)
     assert "bad.xml:3:" in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("name", "cls"),
+    [("independent", "Independent"), ("stratified", "OwenSobol"), ("multijitter", "OwenSobol"),
+     ("ldsampler", "OwenSobol"), ("sobol", "OwenSobol")],
+)  # fmt: skip
+def test_mitsuba_sampler_names(tmp_path, name, cls):
+    """Each of Mitsuba's sampler names maps to a sampler of ours, with its sample_count."""
+    path = tmp_path / "s.xml"
+    path.write_text(_xml(ORTHOGRAPHIC).replace('"independent"><integer name="sample_count" '
+                                               'value="16"', f'"{name}"><integer name='
+                                               '"sample_count" value="12"'))  # fmt: skip
+    desc = load_mitsuba_xml(path)
+    assert desc.spp == 12
+    assert type(scene_sampler(desc)).__name__ == cls
+
+
+def test_unknown_sampler_is_refused(tmp_path):
+    path = tmp_path / "bad.xml"
+    path.write_text(_xml(ORTHOGRAPHIC).replace('"independent"', '"halton"'))
+    with pytest.raises(SceneError, match="unsupported sampler type 'halton'.*line 6"):
+        load_mitsuba_xml(path)
+
+
+def test_render_uses_the_scenes_sampler(tmp_path):
+    """A scene with `<sampler type="ldsampler">` renders with `OwenSobol`, bit-identical to
+    passing it (the driver's default `Independent` gives other images)."""
+    from radiometria.render import OwenSobol, render
+
+    path = tmp_path / "s.xml"
+    path.write_text(_xml(ORTHOGRAPHIC, size=8).replace('"independent"', '"ldsampler"'))
+    kw = {"spp": 2, "progress": False}
+    scene_default = np.asarray(render(path, **kw))
+    np.testing.assert_array_equal(
+        scene_default, np.asarray(render(path, sampler=OwenSobol(), **kw))
+    )

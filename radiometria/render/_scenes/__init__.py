@@ -5,6 +5,7 @@ from ._compile import (
     compile_scene as compile_scene,
     scene_filter as scene_filter,
     scene_integrator as scene_integrator,
+    scene_sampler as scene_sampler,
 )
 from ._description import (
     AreaEmitter as AreaEmitter,

@@ -6,11 +6,19 @@ from ...camera import AbstractCamera, AbstractFilter, OrthographicCamera, ThinLe
 from .._integrators import AbstractIntegrator
 from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
 from .._lights import AreaLight
-from .._registry import CAMERAS, FILTERS, INTEGRATORS, LIGHTS, MATERIALS, MEDIA
+from .._registry import CAMERAS, FILTERS, INTEGRATORS, LIGHTS, MATERIALS, MEDIA, SAMPLERS
 from .._render_scene import RenderScene
+from .._samplers import AbstractSampler
 from ._description import SceneDescription, SceneError
 
-__all__ = ["compile_scene", "scene_filter", "scene_integrator", "scene_lights"]
+__all__ = [
+    "compile_scene",
+    "scene_camera",
+    "scene_filter",
+    "scene_integrator",
+    "scene_lights",
+    "scene_sampler",
+]
 
 # Each filter's parameters in Mitsuba's names, with Mitsuba's defaults (the Gaussian's radius
 # defaults to 4 standard deviations in the filter itself); `catmullrom` is Mitchell B=0, C=1/2.
@@ -179,6 +187,17 @@ def compile_scene(
         **_surface_attributes(description),
     )
     return scene, scene_camera(description, width, height), scene_filter(description)
+
+
+def scene_sampler(description: SceneDescription) -> AbstractSampler:
+    """The sampler the scene file asks for (`SAMPLERS` registry: `Independent` or, for
+    Mitsuba's `stratified`, `multijitter`, `ldsampler` and `sobol`, `OwenSobol`)."""
+    if description.sampler not in SAMPLERS:
+        raise ValueError(
+            f"{description.source or 'scene'}: sampler {description.sampler!r}; supported: "
+            f"{', '.join(SAMPLERS)}."
+        )
+    return SAMPLERS[description.sampler]()
 
 
 def scene_camera(description: SceneDescription, width=None, height=None) -> AbstractCamera:

@@ -263,6 +263,8 @@ class SceneDescription:
         unbounded or unset.
     - `rr_depth`: depth at which Russian roulette starts (Mitsuba's `rr_depth`).
     - `spp`: samples per pixel the file asks for, or `None`.
+    - `sampler`: the sampler the file asks for, a name of
+        `radiometria.render._registry.SAMPLERS` (Mitsuba's names; default `"independent"`).
     - `shape_names`: tuple of shape names.
     - `unit`: the length unit of the coordinates (e.g. `"mm"`), as a string.
     - `source`: where the scene came from (built-in name or path).
@@ -295,6 +297,7 @@ class SceneDescription:
     rr_depth: int = 5
     spp: int | None = None
     integrator: str = "path"
+    sampler: str = "independent"
     shape_names: tuple = ()
     unit: str = "scene units"
     source: str = ""

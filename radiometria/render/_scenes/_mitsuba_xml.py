@@ -35,7 +35,10 @@ and rejects everything else with an error that names the file, the line and the 
   the imaged extent, `near_clip`, `far_clip`); nested `film` and `sampler`.
 - `film`: `hdrfilm` `width`, `height` (other options ignored) and an `rfilter`: `box`,
   `tent`, `gaussian`, `mitchell`, `catmullrom` or `lanczos` with its parameters.
-- `sampler`: any type; `sample_count` becomes the scene's `spp`.
+- `sampler`: a name of `radiometria.render._registry.SAMPLERS`: `independent`, or Mitsuba's
+  stratified and low-discrepancy samplers `stratified`, `multijitter`, `ldsampler`, `sobol`,
+  all rendered with padded Owen-scrambled Sobol points (`OwenSobol`, stratified in every
+  elementary interval); `sample_count` becomes the scene's `spp`.
 - `integrator`: every plugin of `radiometria.render._registry.INTEGRATORS`: `path` with
   `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters` (ignored); `direct`; `moment`
   (Mitsuba's wrapper that adds the moments of its one nested integrator to the film) renders
@@ -54,7 +57,7 @@ import numpy as np
 
 from ...radiometry import AbstractSpectrum, BlackbodySpectrum, PiecewiseLinearSpectrum
 from .._lights import read_envmap
-from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS
+from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS, SAMPLERS
 from .._spectral import LinearRGB, SpectralValue
 from . import _shapes
 from ._description import (
@@ -814,14 +817,22 @@ def _sensor(ctx: _Ctx, node: _Node):
         far_clip=float(props.get("far_clip", 1e4)),
     )
     film = FilmDescription(width=768, height=576)
-    spp = None
+    spp, sampler = None, "independent"
     for ch in node.children:
         if ch.tag == "film":
             film = _film(ctx, ch)
         elif ch.tag == "sampler":
             _only_children(ctx, ch, set())
+            sampler = ctx.attr(ch, "type")
+            if sampler not in SAMPLERS:
+                raise ctx.err(
+                    ch, f"unsupported sampler type '{sampler}' (line {ch.line}); supported: "
+                    f"{sorted(SAMPLERS)}"
+                )  # fmt: skip
             sp = _properties(ctx, ch, {"sample_count", "seed", "jitter", "scramble_seed"})
             spp = sp.get("sample_count")
+            if spp is not None and spp < 1:
+                raise ctx.err(ch, f"sample_count must be >= 1, got {spp}")
             # The render seed is the caller's (`render(seed=...)`, `--seed`, default 0): a
             # scene's other seed would be silently dropped, so it is refused.
             for name in ("seed", "scramble_seed"):
@@ -830,7 +841,7 @@ def _sensor(ctx: _Ctx, node: _Node):
                         ch, f"parameter '{name}' = {sp[name]} is not supported (only 0); give "
                         "the seed to render(seed=...) or the command line's --seed"
                     )  # fmt: skip
-    return camera, film, spp
+    return camera, film, spp, sampler
 
 
 def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
@@ -1000,7 +1011,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     lights: list[LightDescription] = []
     camera = CameraDescription(to_world=np.eye(4), fov_deg=45.0, fov_axis="x")
     film = FilmDescription(width=768, height=576)
-    spp = None
+    spp, sampler = None, "independent"
     max_depth: int | None = None
     rr_depth = 5
     integrator = "path"
@@ -1017,7 +1028,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         elif ch.tag == "texture" and "id" in ch.attrib:  # used by <ref> (_textures_xml)
             ctx.refs[ch.attrib["id"]] = (ch, texture_spec(ctx, ch, _properties))
         elif ch.tag == "sensor":
-            camera, film, spp = _sensor(ctx, ch)
+            camera, film, spp, sampler = _sensor(ctx, ch)
         elif ch.tag == "integrator":
             integrator, p = _integrator(ctx, ch)
             md = p.get("max_depth", -1)
@@ -1028,8 +1039,9 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         else:
             what = f" type='{ch.attrib['type']}'" if "type" in ch.attrib else ""
             raise ctx.err(ch, f"unsupported tag <{ch.tag}{what}> at line {ch.line}")
-    return assemble(
+    scene = assemble(
         shapes, materials, camera, film, max_depth=max_depth, rr_depth=rr_depth, spp=spp,
         integrator=integrator, unit="file units", source=file, lights=tuple(lights),
         **media.assemble_args(),
     )  # fmt: skip
+    return dataclasses.replace(scene, sampler=sampler)
