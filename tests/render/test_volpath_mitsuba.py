@@ -8,11 +8,17 @@ area light behind it. Our `.vol` files are written by `write_vol` and read by bo
   homogeneous one).
 - A varying (ramp) grid against Mitsuba's `heterogeneous` medium reading the same file; the
   same with an RGB (spectrally varying) extinction is a strict xfail: it does not match yet.
+- Homogeneous media, three cases side by side in one 40x16 scene (one compile, one Mitsuba
+  reference), each judged also by the mean of its own third of the image: (a) an area light
+  inside a medium in a `null` cube, (b) a chromatic (RGB sigma_t) medium inside a smooth
+  `dielectric` sphere, (c) a medium in a `null` sphere; all under an environment map
+  (written here as EXR) that the area light of (a) adds to.
 """
 
 import numpy as np
 import pytest
 
+from radiometria.camera import write_exr
 from radiometria.montecarlo import pixel_z_test
 from radiometria.render import render
 from radiometria.render._scenes._volume_files import write_vol
@@ -112,3 +118,102 @@ def test_a_twenty_percent_denser_grid_fails_the_z_test(tmp_path):
     ours.write_text(ours.read_text().replace('value="0.5"', 'value="0.6"'))
     _, mean_ok = _z_test(ours, ref)
     assert not mean_ok
+
+
+MEDIA_SPP = 512
+MEDIA_REF_SPP = 2048
+
+MEDIA_SCENE = """<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 0, 8" target="0, 0, 0" up="0, 1, 0"/>
+    </transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="16"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <integrator type="volpath"><integer name="max_depth" value="8"/></integrator>
+  <emitter type="envmap"><string name="filename" value="{exr}"/>
+    <float name="scale" value="0.5"/></emitter>
+  <medium type="homogeneous" id="fog"><float name="sigma_t" value="1.5"/>
+    <rgb name="albedo" value="0.9, 0.7, 0.5"/><phase type="hg"><float name="g" value="0.5"/>
+    </phase></medium>
+  <shape type="cube"><transform name="to_world"><scale value="0.8"/><translate x="-2"/>
+    </transform><bsdf type="null"/><ref name="interior" id="fog"/></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.35"/><rotate y="1" angle="20"/>
+      <translate x="-2" z="-0.2"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+    <ref name="interior" id="fog"/><ref name="exterior" id="fog"/>
+    <emitter type="area"><rgb name="radiance" value="4, 4, 4"/></emitter></shape>
+  <medium type="homogeneous" id="tint"><rgb name="sigma_t" value="0.2, 0.5, 1.0"/>
+    <float name="scale" value="{tint_scale}"/><float name="albedo" value="0.8"/></medium>
+  <shape type="sphere"><float name="radius" value="0.9"/>
+    <bsdf type="dielectric"><float name="int_ior" value="1.33"/></bsdf>
+    <ref name="interior" id="tint"/></shape>
+  <medium type="homogeneous" id="cloud"><float name="sigma_t" value="1.2"/>
+    <rgb name="albedo" value="0.95, 0.8, 0.6"/></medium>
+  <shape type="sphere"><float name="radius" value="0.9"/><point name="center" x="2" y="0" z="0"/>
+    <bsdf type="null"/><ref name="interior" id="cloud"/></shape>
+</scene>
+"""
+# The emitting rectangle has an explicit black BSDF: Mitsuba 3 gives an emitter shape without
+# a BSDF a diffuse one of reflectance 0, which our loader does not do yet (it uses 0.5).
+
+BANDS = {"area light in a medium": 0, "chromatic medium behind glass": 1, "envmap cloud": 2}
+
+
+def _band_means_ok(img, mean, var, spp, ref_spp):
+    """Per case (a third of the image's columns), is the mean of our pixels within 4 pooled
+    standard errors of Mitsuba's, in every XYZ channel?"""
+    out = {}
+    for case, k in BANDS.items():
+        cols = slice(k * 40 // 3, (k + 1) * 40 // 3)
+        m, v, x = mean[:, cols], var[:, cols], img[:, cols]
+        n = m.shape[0] * m.shape[1]
+        se = np.sqrt(v.sum(axis=(0, 1)) / n**2 * (1 / spp + 1 / ref_spp))
+        out[case] = bool(np.all(np.abs((x - m).mean(axis=(0, 1))) < 4 * se))
+    return out
+
+
+@pytest.fixture(scope="module")
+def media_scene(tmp_path_factory):
+    """The scene file (a function of the dielectric sphere's extinction scale) and Mitsuba's
+    per-pixel mean and variance of it at scale 3."""
+    tmp = tmp_path_factory.mktemp("media")
+    sky = np.random.default_rng(3).uniform(0.05, 1.0, (16, 32, 3))
+    sky[4:7, 9:13] = [4.0, 2.0, 0.5]  # a warm bright patch
+    exr = write_exr(tmp / "sky.exr", sky)
+
+    def scene(tint_scale: float):
+        path = tmp / f"media_{tint_scale}.xml"
+        path.write_text(MEDIA_SCENE.format(exr=exr, tint_scale=tint_scale))
+        return path
+
+    mean, var = mitsuba_moments(scene(3.0), MEDIA_REF_SPP, seed=1)
+    return scene, mean, var
+
+
+def _ours(path):
+    img = render(path, spp=MEDIA_SPP, seed=0, return_xyz=True, progress=False)
+    return np.asarray(img, np.float64)
+
+
+def test_homogeneous_media_pass_the_pixel_z_test_against_mitsuba(media_scene):
+    scene, mean, var = media_scene
+    img = _ours(scene(3.0))
+    result = pixel_z_test(img, mean, var, MEDIA_SPP, MEDIA_REF_SPP)
+    assert result.passed, result.message
+    ok = _band_means_ok(img, mean, var, MEDIA_SPP, MEDIA_REF_SPP)
+    assert all(ok.values()), ok
+
+
+def test_a_denser_chromatic_medium_fails_its_image_mean_test(media_scene):
+    """The test can fail: the dielectric sphere's medium 10 % denser (scale 3.3, same
+    compiled renderer) is seen by that case's image-mean test and by no other case's."""
+    scene, mean, var = media_scene
+    ok = _band_means_ok(_ours(scene(3.3)), mean, var, MEDIA_SPP, MEDIA_REF_SPP)
+    assert ok == {
+        "area light in a medium": True,
+        "chromatic medium behind glass": False,
+        "envmap cloud": True,
+    }
