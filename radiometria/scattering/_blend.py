@@ -21,14 +21,15 @@ __all__ = ["BlendBxDF", "MaskBxDF"]
 _ONE_MINUS = 1.0 - 2.0**-24  # keep rescaled variates in [0, 1) in float32
 
 
-def _rescale(u: Array, lo: Array, width: Array) -> Array:
+def _rescale(u: Array, lo: Array | float, width: Array | float) -> Array:
     """(u - lo) / width clipped to [0, 1): the variate reused inside the chosen component."""
     return jnp.clip(safe_div(u - lo, width), 0.0, _ONE_MINUS)
 
 
 def _active(one_sided: Array, wo: Array) -> Array:
-    """A one-sided component scatters only for wo on the side of the normal (+z)."""
-    return ~(one_sided & (wo[..., 2] < 0))
+    """1 where the component scatters, else 0 (in `wo`'s dtype): a one-sided component scatters
+    only for wo on the side of the normal (+z)."""
+    return (~(one_sided & (wo[..., 2] < 0))).astype(wo.dtype)
 
 
 def _select(mask: Array, a: BSDFSample, b: BSDFSample) -> BSDFSample:
