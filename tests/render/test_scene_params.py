@@ -186,3 +186,21 @@ def test_bad_spectrum_files_name_file_and_line(tmp_path, content, match):
 def test_missing_spectrum_file(tmp_path):
     with pytest.raises(FileNotFoundError, match=r"scene.xml:\d+: .*nope.spd"):
         _reflectance(tmp_path, '<spectrum name="reflectance" filename="nope.spd"/>')
+
+
+@pytest.mark.parametrize("kind", ["path", "direct", "volpath"])
+def test_hide_emitters_in_the_file_reaches_the_integrator(tmp_path, kind):
+    """`<boolean name="hide_emitters">` of the file's integrator is kept by the loader and
+    given to the integrator plugin (also when `--integrator` picks another one that takes
+    it)."""
+    from radiometria.render._scenes._compile import scene_integrator
+
+    xml = _xml("").replace(
+        '<integrator type="path"><integer name="max_depth" value="4"/>',
+        f'<integrator type="{kind}"><boolean name="hide_emitters" value="true"/>',
+    )
+    path = tmp_path / "scene.xml"
+    path.write_text(xml)
+    description = load_mitsuba_xml(path)
+    assert scene_integrator(description).hide_emitters is True
+    assert scene_integrator(description, name="path").hide_emitters is True

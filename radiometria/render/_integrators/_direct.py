@@ -2,6 +2,8 @@
 
 from typing import ClassVar
 
+import equinox as eqx
+
 from ._base import AbstractIntegrator
 from ._path import DIMENSIONS_PER_BOUNCE, path_radiance, sample_dimensions
 
@@ -16,6 +18,11 @@ class Direct(AbstractIntegrator):
     `max_depth=2`), which is Mitsuba's `direct` integrator with one emitter and one BSDF
     sample per vertex.
 
+    **Arguments:**
+
+    - `hide_emitters`: emitters seen directly from the camera are black (Mitsuba's
+        `hide_emitters`; default False).
+
     !!! note "Thesis"
         Chapter 8 (direct lighting; title only in the text).
 
@@ -28,16 +35,26 @@ class Direct(AbstractIntegrator):
         {"emitter_samples", "bsdf_samples", "shading_samples", "hide_emitters"}
     )
 
+    hide_emitters: bool = eqx.field(static=True, default=False)
+
+    def __check_init__(self):
+        if not isinstance(self.hide_emitters, bool):
+            raise TypeError(f"`hide_emitters` must be a bool, got {self.hide_emitters!r}.")
+
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "Direct":
-        """Mitsuba's `direct` with its defaults (one emitter and one BSDF sample)."""
+        """Mitsuba's `direct` with its defaults (one emitter and one BSDF sample) and
+        `hide_emitters`."""
         for name, default in (("emitter_samples", 1), ("bsdf_samples", 1)):
             if params.get(name, default) != default:
                 raise ValueError(
                     f"{where}: the direct integrator takes {name} = {default}, got "
                     f"{params[name]!r}."
                 )
-        return cls()
+        hide = params.get("hide_emitters", False)
+        if not isinstance(hide, bool):
+            raise ValueError(f"{where}: hide_emitters must be a boolean, got {hide!r}.")
+        return cls(hide_emitters=hide)
 
     def sample_dimensions(self) -> int:
         return sample_dimensions(_SEGMENTS)
@@ -55,4 +72,5 @@ class Direct(AbstractIntegrator):
             max_depth=_SEGMENTS,
             rr_depth=_SEGMENTS,
             active=active,
+            hide_emitters=self.hide_emitters,
         )

@@ -63,7 +63,8 @@ def scene_integrator(
     **Arguments:**
 
     - `description`: a `SceneDescription` (its `integrator` name, `max_depth` and `rr_depth`
-        [path segments]; an unbounded depth becomes 64 segments).
+        [path segments]; an unbounded depth becomes 64 segments; its other
+        `integrator_params`, such as `hide_emitters`, where the integrator takes them).
     - `name`: another integrator of the registry instead of the file's (`--integrator`).
     - `max_depth`: a depth instead of the file's (`--max-depth`) [path segments]; a
         `ValueError` for an integrator without one.
@@ -82,7 +83,7 @@ def scene_integrator(
     if max_depth is not None and "max_depth" not in cls.PARAMETERS:
         raise ValueError(f"max_depth does not apply to the {name!r} integrator.")
     depth = description.max_depth if max_depth is None else max_depth
-    params = {
+    params = dict(description.integrator_params) | {
         "max_depth": DEFAULT_UNBOUNDED_DEPTH if depth is None else depth,
         "rr_depth": description.rr_depth,
     }

@@ -262,6 +262,8 @@ class SceneDescription:
         emitters seen directly, 2 = direct illumination), or `None` when the file leaves it
         unbounded or unset.
     - `rr_depth`: depth at which Russian roulette starts (Mitsuba's `rr_depth`).
+    - `integrator_params`: the integrator's other parameters as `(name, value)` pairs (e.g.
+        `(("hide_emitters", True),)`), passed to its `from_properties`.
     - `spp`: samples per pixel the file asks for, or `None`.
     - `sampler`: the sampler the file asks for, a name of
         `radiometria.render._registry.SAMPLERS` (Mitsuba's names; default `"independent"`).
@@ -297,6 +299,7 @@ class SceneDescription:
     rr_depth: int = 5
     spp: int | None = None
     integrator: str = "path"
+    integrator_params: tuple = ()
     sampler: str = "independent"
     shape_names: tuple = ()
     unit: str = "scene units"

@@ -1015,6 +1015,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     max_depth: int | None = None
     rr_depth = 5
     integrator = "path"
+    integrator_params: tuple = ()
     for ch in elements:
         if ch.tag == "bsdf":
             idx = _bsdf(ctx, ch, materials)
@@ -1036,6 +1037,9 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
                 raise ctx.err(ch, f"max_depth must be -1 (unbounded) or >= 1, got {md}")
             max_depth = None if md == -1 else md
             rr_depth = p.get("rr_depth", 5)
+            integrator_params = tuple(
+                (k, v) for k, v in p.items() if k not in ("max_depth", "rr_depth")
+            )
         else:
             what = f" type='{ch.attrib['type']}'" if "type" in ch.attrib else ""
             raise ctx.err(ch, f"unsupported tag <{ch.tag}{what}> at line {ch.line}")
@@ -1044,4 +1048,4 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         integrator=integrator, unit="file units", source=file, lights=tuple(lights),
         **media.assemble_args(),
     )  # fmt: skip
-    return dataclasses.replace(scene, sampler=sampler)
+    return dataclasses.replace(scene, sampler=sampler, integrator_params=integrator_params)
