@@ -31,8 +31,11 @@ from ._film import (
     film_add_samples as film_add_samples,
     film_add_XYZ as film_add_XYZ,
     film_develop as film_develop,
+    film_develop_spectral as film_develop_spectral,
     film_merge as film_merge,
+    film_samples_to_spectral_bins as film_samples_to_spectral_bins,
     film_samples_to_XYZ as film_samples_to_XYZ,
+    spectral_bin_centres as spectral_bin_centres,
     splat_samples as splat_samples,
 )
 from ._filters import (

@@ -19,6 +19,18 @@ $K_m \int L \bar{y}$); multiply by $683 \cdot 106.857$ lm W^-1 nm for that.
 The film keeps per-pixel sums $\sum_i w_i \mathrm{XYZ}_i$ and $\sum_i w_i$ (thesis eq. 2.35);
 `film_develop` divides them and converts to linear RGB. Accumulation is a scatter-add
 (`.at[].add`) whose memory is the image's, whatever the number of samples.
+
+**Spectral film.** `Film(..., spectral_bins=n)` also keeps $\sum_i w_i \hat L_{i,b}$ for $n$
+equal bins $b$ of width $\Delta = (830 - 360)/n$ nm over [360, 830] nm (the range of the
+renderer's wavelength sampling), where
+
+$$\hat L_{i,b} = \frac{1}{n_\lambda} \sum_j \frac{L(\lambda_j)\,
+\mathbb{1}[\lambda_j \in b]}{p(\lambda_j)\,\Delta}$$
+
+is an unbiased estimate of the bin average $\frac1\Delta\int_b L\,\mathrm{d}\lambda$
+($\mathrm{E}[L(\lambda_j)\mathbb{1}_b(\lambda_j)/p(\lambda_j)] = \int_b L$ for each
+$\lambda_j \sim p$); `film_develop_spectral` divides by the same weight sums as the XYZ, so the
+spectral image is the filtered, bin-averaged spectral radiance [W m^-2 sr^-1 nm^-1].
 """
 
 import equinox as eqx
@@ -31,6 +43,31 @@ from ..colorimetry import get_cmfs, get_colourspace
 from ._filters import AbstractFilter
 
 DEFAULT_OBSERVER = "CIE 1931 2 Degree Standard Observer"
+SPECTRAL_FILM_RANGE_NM = (360.0, 830.0)  # the renderer's wavelength sampling range [nm]
+DEFAULT_SPECTRAL_BINS = 47  # 10 nm bins over [360, 830] nm
+
+
+def spectral_bin_centres(n_bins: int = DEFAULT_SPECTRAL_BINS) -> np.ndarray:
+    """Centres of the spectral film's `n_bins` equal bins over [360, 830] nm.
+
+    **Arguments:**
+
+    - `n_bins`: number of bins, >= 1 (default 47: 10 nm bins). [1]
+
+    **Returns:**
+
+    The centres (n_bins,) float64 [nm]; bin `b` spans centre +- width / 2, width
+    `470 / n_bins` nm.
+
+    !!! note "Thesis"
+        Section 2.3.2 (the film).
+
+    ??? cite "References"
+        `Fichet2021` (spectral images); `Pharr2023` §5.4 (film; pbrt-v4's `SpectralFilm`).
+    """
+    n = check_positive_int(n_bins, "n_bins")
+    lo, hi = SPECTRAL_FILM_RANGE_NM
+    return lo + (hi - lo) * (np.arange(n, dtype=np.float64) + 0.5) / n
 
 
 def _cmf_table(cmfs, observer: str) -> tuple[np.ndarray, np.ndarray]:
@@ -123,8 +160,15 @@ class Film(eqx.Module):
 
     **Fields:**
 
-    `xyz_sum` (H, W, 3), `weight_sum` (H, W), `cmf_wavelengths_nm` (n,) [nm],
-    `cmf_values` (n, 3) [nm^-1] (normalised CMFs), `width`, `height` (static).
+    - `spectral_bins`: `None` (default) for an XYZ film; an integer n >= 1 to also accumulate
+        spectral radiance in n equal bins over [360, 830] nm (module docstring;
+        `spectral_bin_centres`). [1]
+
+    **Fields:**
+
+    `xyz_sum` (H, W, 3), `weight_sum` (H, W), `spectral_sum` (H, W, n) or `None`,
+    `cmf_wavelengths_nm` (n,) [nm], `cmf_values` (n, 3) [nm^-1] (normalised CMFs), `width`,
+    `height`, `spectral_bins` (static).
 
     !!! note "Thesis"
         Thesis section 2.3.2, eq. 2.34-2.35; section 2.2 (XYZ).
@@ -139,6 +183,8 @@ class Film(eqx.Module):
     weight_sum: Float[Array, "H W"]
     cmf_wavelengths_nm: Float[Array, " n"]
     cmf_values: Float[Array, "n 3"]
+    spectral_sum: Float[Array, "H W bins"] | None
+    spectral_bins: int | None = eqx.field(static=True)
 
     def __init__(
         self,
@@ -148,6 +194,7 @@ class Film(eqx.Module):
         cmfs=None,
         observer: str = DEFAULT_OBSERVER,
         dtype=None,
+        spectral_bins: int | None = None,
     ):
         self.width = check_positive_int(width, "width")
         self.height = check_positive_int(height, "height")
@@ -155,6 +202,11 @@ class Film(eqx.Module):
         dtype = self.cmf_values.dtype
         self.xyz_sum = jnp.zeros((self.height, self.width, 3), dtype)
         self.weight_sum = jnp.zeros((self.height, self.width), dtype)
+        if spectral_bins is None:
+            self.spectral_bins, self.spectral_sum = None, None
+        else:
+            self.spectral_bins = check_positive_int(spectral_bins, "spectral_bins")
+            self.spectral_sum = jnp.zeros((self.height, self.width, self.spectral_bins), dtype)
 
     @property
     def response(self) -> SpectralResponse:
@@ -218,6 +270,50 @@ def film_samples_to_XYZ(
     inv_p = jnp.where(ok, 1.0 / jnp.where(ok, p, 1.0), 0.0)
     contrib = (L * inv_p)[..., None] * cmf  # (..., n_lambda, 3)
     return jnp.mean(contrib, axis=-2)
+
+
+def film_samples_to_spectral_bins(
+    L_lambda: ArrayLike, wavelengths_nm: ArrayLike, pdf: ArrayLike, n_bins: int
+) -> Float[Array, "*batch bins"]:
+    r"""Estimates of the bin-averaged spectral radiance from spectral radiance samples.
+
+    Bin $b$ of the $n$ equal bins of width $\Delta$ over [360, 830] nm gets
+    $\frac{1}{n_\lambda}\sum_j L_j \mathbb{1}[\lambda_j \in b] / (p_j \Delta)$, an unbiased
+    estimate of $\frac1\Delta\int_b L\,\mathrm{d}\lambda$ (module docstring). Samples outside
+    the range or with $p_j = 0$ contribute 0.
+
+    **Arguments:**
+
+    - `L_lambda`: spectral radiance (..., n_lambda). [W m^-2 sr^-1 nm^-1]
+    - `wavelengths_nm`: the sampled wavelengths, broadcastable to `L_lambda`. [nm]
+    - `pdf`: the density of each wavelength (marginal of one), broadcastable to
+        `L_lambda`. [nm^-1]
+    - `n_bins`: number of bins, >= 1. [1]
+
+    **Returns:**
+
+    (..., n_bins) in the dtype of `L_lambda`. [W m^-2 sr^-1 nm^-1]
+
+    !!! note "Thesis"
+        Section 2.3.2 (the film), Monte Carlo estimation (eq. 2.12-2.14 with box responses).
+
+    ??? cite "References"
+        `Pharr2023` §5.4 (film; pbrt-v4's `SpectralFilm`); `Wilkie2014` (hero wavelengths).
+    """
+    n = check_positive_int(n_bins, "n_bins")
+    L = as_float_array(L_lambda, "L_lambda")
+    if L.ndim == 0:
+        raise ValueError("`L_lambda` must have a last (wavelength) axis, got a scalar.")
+    dtype = L.dtype
+    wl = jnp.broadcast_to(as_float_array(wavelengths_nm, "wavelengths_nm").astype(dtype), L.shape)
+    p = jnp.broadcast_to(as_float_array(pdf, "pdf").astype(dtype), L.shape)
+    lo, hi = SPECTRAL_FILM_RANGE_NM
+    width = (hi - lo) / n
+    ok = (p > 0) & (wl >= lo) & (wl <= hi)
+    value = jnp.where(ok, L / (jnp.where(ok, p, 1.0) * width), 0.0)  # (..., n_lambda)
+    b = jnp.clip(jnp.floor((wl - lo) / width).astype(jnp.int32), 0, n - 1)
+    onehot = b[..., None] == jnp.arange(n, dtype=jnp.int32)  # (..., n_lambda, n)
+    return jnp.sum(jnp.where(onehot, value[..., None], 0.0), axis=-2) / L.shape[-1]
 
 
 def _flat_pixel_index(film: Film, pixel, batch_shape: tuple[int, ...]) -> Array:
@@ -417,9 +513,14 @@ def film_merge(a: Film, b: Film) -> Film:
         raise ValueError(
             f"Films differ in size: {a.width}x{a.height} and {b.width}x{b.height} [px]."
         )
-    return eqx.tree_at(
+    if a.spectral_bins != b.spectral_bins:
+        raise ValueError(f"Films differ in spectral bins: {a.spectral_bins} and {b.spectral_bins}.")
+    merged = eqx.tree_at(
         lambda f: (f.xyz_sum, f.weight_sum), a, (a.xyz_sum + b.xyz_sum, a.weight_sum + b.weight_sum)
     )
+    if a.spectral_sum is None:
+        return merged
+    return eqx.tree_at(lambda f: f.spectral_sum, merged, a.spectral_sum + b.spectral_sum)
 
 
 def _xyz_to_rgb_matrix(colourspace, dtype) -> Array:
@@ -466,3 +567,33 @@ def film_develop(film: Film, colourspace="sRGB") -> Float[Array, "H W 3"]:
         return xyz
     m = _xyz_to_rgb_matrix(colourspace, xyz.dtype)
     return jnp.einsum("ij,...j->...i", m, xyz)
+
+
+def film_develop_spectral(film: Film) -> Float[Array, "H W bins"]:
+    r"""The filtered spectral image: $\sum_i w_i \hat L_{i,b} / \sum_i w_i$ per pixel and bin.
+
+    The same weights as `film_develop`'s XYZ, so integrating the bins against the CMFs gives
+    the XYZ image up to the binning error. Pixels with zero weight sum are 0.
+
+    **Arguments:**
+
+    - `film`: a `Film` made with `spectral_bins`.
+
+    **Returns:**
+
+    (H, W, n) bin-averaged spectral radiance at `spectral_bin_centres(n)`, in the film's
+    dtype. [W m^-2 sr^-1 nm^-1]
+
+    !!! note "Thesis"
+        Eq. 2.34-2.35; section 2.3.2.
+
+    ??? cite "References"
+        `Pharr2023` §5.4; `Fichet2021`.
+    """
+    if film.spectral_sum is None:
+        raise ValueError("`film` has no spectral bins; make it with Film(..., spectral_bins=n).")
+    ws = film.weight_sum
+    nonzero = ws != 0
+    return jnp.where(
+        nonzero[..., None], film.spectral_sum / jnp.where(nonzero, ws, 1.0)[..., None], 0.0
+    )

@@ -66,7 +66,10 @@ from ..camera import (
     GaussianFilter,
     SpectralResponse,
     film_develop,
+    film_develop_spectral,
+    film_samples_to_spectral_bins,
     film_samples_to_XYZ,
+    spectral_bin_centres,
 )
 from ._cache import checks_without_callbacks
 from ._checkpoint import CheckpointError, load_checkpoint, render_identity, save_checkpoint
@@ -183,6 +186,7 @@ class _Config:
     width: int
     reconstruction: str
     devices: tuple
+    spectral_bins: int = 0  # 0: an XYZ film only
 
 
 def _footprint_radius(cfg: _Config, rfilter) -> int:
@@ -245,12 +249,19 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     )
     xyz = film_samples_to_XYZ(kernel.response, radiance, wavelength_nm, pdf)
     ok = active & jnp.all(jnp.isfinite(xyz), axis=-1)
+    if cfg.spectral_bins:  # the spectral film's bins travel after [wX, wY, wZ, w]
+        bins = film_samples_to_spectral_bins(radiance, wavelength_nm, pdf, cfg.spectral_bins)
+        ok = ok & jnp.all(jnp.isfinite(bins), axis=-1)
+        xyz = jnp.concatenate([xyz, bins.astype(dtype)], axis=-1)
     w = jnp.where(ok, weight.astype(dtype), 0.0)
     values = jnp.concatenate([jnp.where(ok[:, None], xyz, 0.0) * w[:, None], w[:, None]], axis=-1)
-    values = values.reshape(t, k, 4)
+    if cfg.spectral_bins:  # [wX, wY, wZ, w, w L_1, ..., w L_n]
+        values = jnp.concatenate([values[:, :3], values[:, -1:], values[:, 3:-1]], axis=-1)
+    channels = values.shape[-1]
+    values = values.reshape(t, k, channels)
     radius = _footprint_radius(cfg, kernel.rfilter)
     if radius == 0:
-        return jnp.sum(values, axis=1).reshape(t, 1, 1, 4)
+        return jnp.sum(values, axis=1).reshape(t, 1, 1, channels)
     d = jnp.arange(-radius, radius + 1, dtype=dtype)
     # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis.
     to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
@@ -328,7 +339,8 @@ def _add_splats(film: Film, raster, xyz, rfilter, width: int, height: int) -> Fi
 
 
 def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> Film:
-    """Scatter-add `(t, F, F, 4)` footprints of the pixels `pixel` into the film's sums."""
+    """Scatter-add `(t, F, F, 4)` footprints of the pixels `pixel` into the film's sums
+    (`(t, F, F, 4 + n)` with a spectral film's n bins after the weight)."""
     radius = (footprints.shape[1] - 1) // 2
     d = jnp.arange(-radius, radius + 1, dtype=jnp.int32)
     x = (pixel % width)[:, None, None] + d[None, None, :]
@@ -337,9 +349,15 @@ def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> F
         (x >= 0) & (x < width) & (y >= 0) & (y < height) & (pixel < width * height)[:, None, None]
     )
     idx = jnp.where(inside, y * width + x, width * height).reshape(-1)  # out of range: dropped
-    values = footprints.reshape(-1, 4)
+    values = footprints.reshape(-1, footprints.shape[-1])
     xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(values[:, :3], mode="drop")
     weight_sum = film.weight_sum.reshape(-1).at[idx].add(values[:, 3], mode="drop")
+    if film.spectral_sum is not None:
+        n_bins = film.spectral_sum.shape[-1]
+        spectral_sum = film.spectral_sum.reshape(-1, n_bins).at[idx].add(values[:, 4:], mode="drop")
+        film = eqx.tree_at(
+            lambda f: f.spectral_sum, film, spectral_sum.reshape(film.spectral_sum.shape)
+        )
     return eqx.tree_at(
         lambda f: (f.xyz_sum, f.weight_sum),
         film,
@@ -363,6 +381,7 @@ def render(
     rfilter: AbstractFilter | None = None,
     reconstruction: str = "splat",
     return_xyz: bool = False,
+    spectral_bins: int | None = None,
     checkpoint=None,
     checkpoint_every: float = 60.0,
     resume: bool = False,
@@ -408,6 +427,16 @@ def render(
         to $(2r+1)^2$ pixels, which for the Gaussian of the Cornell box divides the pixel
         variance by about $4\pi\sigma^2 \approx 3$ at the cost of correlated noise.
     - `return_xyz`: return CIE XYZ instead of linear sRGB.
+    - `spectral_bins`: `None` (default) for an RGB/XYZ image only; an integer n in
+        [1, 4710] for a spectral film as well: n equal bins over [360, 830] nm (47 gives the
+        10 nm of the CIE's tables; `radiometria.camera.spectral_bin_centres`), each sample's
+        hero wavelengths added to their bins with weight $L/(p\,\Delta)$ over the 4
+        wavelengths and the same filter weights as the XYZ, so each bin is an unbiased estimate
+        of the filtered, bin-averaged spectral radiance (`radiometria.camera.Film`). The render
+        then returns `(image, spectral, wavelengths_nm)`; `preview` receives that tuple as its
+        image. Costs n floats per pixel (checked against memory) and a footprint of n values
+        per pixel in each step (the default `batch` shrinks to match); off, nothing changes.
+        Not with `checkpoint` nor a splatting-only integrator (`PTracer`).
     - `checkpoint`: a file path: every `checkpoint_every` seconds [s] (and when interrupted)
         the film's sums, the steps done and the render's identity are written there
         atomically (`radiometria.render._checkpoint`). With `resume=True` the render continues
@@ -426,7 +455,9 @@ def render(
 
     The image `(height, width, 3)` float32: linear sRGB (D65 white, no tone mapping) or XYZ,
     in the unit of the scene's radiance (a radiance spectrum $L$ gives
-    $Y = \int L \bar y / \int \bar y$).
+    $Y = \int L \bar y / \int \bar y$). With `spectral_bins=n`: `(image, spectral,
+    wavelengths_nm)`, `spectral` `(height, width, n)` float32 [W m^-2 sr^-1 nm^-1 for a
+    scene in those units] at the bin centres `wavelengths_nm` (n,) [nm].
 
     Memory stays bounded by `batch`, never by `width x height x spp`; absurd image sizes are
     refused with a `ValueError` before anything is allocated. See the module docstring for the
@@ -452,6 +483,7 @@ def render(
         )
     integrator = scene_integrator_ if integrator is None else integrator
     sampler = scene_sampler_ if sampler is None else sampler
+    n_bins = _check_spectral_bins(spectral_bins, integrator, checkpoint)
     width, height = int(camera.width), int(camera.height)
     n_pixels = width * height
     if n_pixels > _MAX_PIXELS:
@@ -461,26 +493,37 @@ def render(
     devices = list(jax.local_devices() if devices is None else devices)
     if not devices:
         raise ValueError("`devices` must name at least one device.")
-    batch = _default_batch(devices) if batch is None else check_positive_int(batch, "batch")
-    film_bytes = n_pixels * _FILM_BYTES_PER_PIXEL
+    if batch is None:
+        batch = _default_batch(devices)
+        if n_bins:  # a step's footprints hold n more values per pixel and filter offset
+            footprint = 2 * _footprint_radius(_Config(1, 1, 1, 1, reconstruction, ()), rfilter) + 1
+            per_path = _PATH_BYTES + 4 * n_bins * (footprint**2 + 4)
+            batch = max(len(devices), batch * _PATH_BYTES // per_path)
+    else:
+        batch = check_positive_int(batch, "batch")
+    per_pixel = _FILM_BYTES_PER_PIXEL + 4 * 3 * n_bins
+    film_bytes = n_pixels * per_pixel
     available = _available_host_memory()
     if film_bytes > available // 2:
         raise ValueError(
             f"A {width} x {height} film needs about {film_bytes / 2**30:.1f} GiB of memory "
-            f"({_FILM_BYTES_PER_PIXEL} bytes per pixel), more than half of the "
-            f"{available / 2**30:.1f} GiB available; render a smaller image."
+            f"({per_pixel} bytes per pixel"
+            + (f", {n_bins} spectral bins" if n_bins else "")
+            + f"), more than half of the {available / 2**30:.1f} GiB available; render a "
+            "smaller image" + (" or use fewer spectral bins." if n_bins else ".")
         )
     plan = _plan(n_pixels, spp, batch, len(devices))
     response = SpectralResponse.from_observer(dtype=jnp.float32)
     kernel = _Kernel(scene, camera, rfilter, response, integrator, sampler)
-    cfg = _Config(n_pixels, plan.tile, plan.passes, width, reconstruction, tuple(devices))
+    cfg = _Config(n_pixels, plan.tile, plan.passes, width, reconstruction, tuple(devices), n_bins)
     key = jax.random.key(int(seed))
     spp_arr = jnp.int32(spp)
     # The film lives where the step leaves it (replicated over the mesh), so that the first
     # step and the later ones share one compiled program (an uncommitted first film would be
     # a different jit signature and compile the step twice).
     mesh = Mesh(np.asarray(cfg.devices), ("pixels",))
-    film = jax.device_put(Film(width, height, dtype=jnp.float32), NamedSharding(mesh, P()))
+    film = Film(width, height, dtype=jnp.float32, spectral_bins=n_bins or None)
+    film = jax.device_put(film, NamedSharding(mesh, P()))
 
     # Multi-host: process i of m takes steps i, i + m, ...; the films are summed at the end.
     n_proc, proc = jax.process_count(), jax.process_index()
@@ -535,15 +578,14 @@ def render(
                     save_checkpoint(checkpoint, film.xyz_sum, film.weight_sum, done, identity)
                 last_checkpoint = now
             if preview is not None and not stop and now - last_preview >= preview_every:
-                preview(np.asarray(_develop(film, "XYZ" if return_xyz else "sRGB")),
-                        _spp_reached(plan, done, spp))  # fmt: skip
+                preview(_result(film, return_xyz), _spp_reached(plan, done, spp))
                 last_preview = now
             if stop:
                 break
     if bar is not None:
         bar.close()
     if interrupts.received is not None and done < plan.n_steps:
-        image = np.asarray(_develop(film, "XYZ" if return_xyz else "sRGB"))
+        image = _result(film, return_xyz)
         raise RenderInterrupted(
             interrupts.received, image, _spp_reached(plan, done, spp), checkpoint
         )
@@ -552,11 +594,57 @@ def render(
         film = eqx.tree_at(
             lambda f: (f.xyz_sum, f.weight_sum), film, tuple(jnp.sum(p, axis=0) for p in parts)
         )
+        if n_bins:
+            part = multihost_utils.process_allgather(film.spectral_sum)
+            film = eqx.tree_at(lambda f: f.spectral_sum, film, jnp.sum(part, axis=0))
+    if n_bins:
+        return _result(film, return_xyz)
     return _develop(film, "XYZ" if return_xyz else "sRGB")
 
 
 # One compiled program for the development (op by op, each of its operations would compile).
 _develop = eqx.filter_jit(film_develop)
+_develop_spectral = eqx.filter_jit(film_develop_spectral)
+
+
+def _result(film: Film, return_xyz: bool):
+    """What `render` returns for the film so far: the image, and with a spectral film the
+    tuple `(image, spectral, wavelengths_nm)` (NumPy arrays)."""
+    image = np.asarray(_develop(film, "XYZ" if return_xyz else "sRGB"))
+    if film.spectral_sum is None:
+        return image
+    spectral = np.asarray(_develop_spectral(film))
+    return image, spectral, spectral_bin_centres(film.spectral_bins)
+
+
+MAX_SPECTRAL_BINS = 4710  # 0.1 nm bins: finer than any renderer's spectral detail
+
+
+def _check_spectral_bins(spectral_bins, integrator, checkpoint) -> int:
+    """`spectral_bins` as an int (0 for none); refused where the film cannot keep them."""
+    if spectral_bins is None:
+        return 0
+    if isinstance(spectral_bins, bool) or not isinstance(spectral_bins, int | np.integer):
+        raise TypeError(
+            f"`spectral_bins` must be None or an int in [1, {MAX_SPECTRAL_BINS}], got "
+            f"{type(spectral_bins).__name__} {spectral_bins!r}."
+        )
+    if not 1 <= spectral_bins <= MAX_SPECTRAL_BINS:
+        raise ValueError(
+            f"`spectral_bins` must be in [1, {MAX_SPECTRAL_BINS}] (bins over [360, 830] nm), "
+            f"got {spectral_bins}."
+        )
+    if _splats_only(integrator):
+        raise ValueError(
+            f"`spectral_bins` is not supported with the splatting-only integrator "
+            f"{type(integrator).__name__}; use an RGB render or another integrator."
+        )
+    if checkpoint is not None:
+        raise ValueError(
+            "`spectral_bins` cannot be combined with `checkpoint` (checkpoints hold the XYZ "
+            "film only); render without a checkpoint."
+        )
+    return int(spectral_bins)
 
 
 class RenderInterrupted(KeyboardInterrupt):
