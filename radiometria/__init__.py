@@ -12,19 +12,50 @@ rm.radiometry.planck(550.0, 5000.0)  # W sr^-1 m^-2 nm^-1
 ```
 """
 
+import importlib
 import importlib.metadata
+from typing import TYPE_CHECKING
 
-from . import (
-    camera as camera,
-    colorimetry as colorimetry,
-    constants as constants,
-    media as media,
-    montecarlo as montecarlo,
-    photometry as photometry,
-    radiometry as radiometry,
-    render as render,
-    scattering as scattering,
-    upsampling as upsampling,
+# The subpackages load on first use (PEP 562), so that `radiometria render --help` or a script
+# that needs only `radiometry` does not pay for importing every floor (about a second).
+_SUBPACKAGES = (
+    "camera",
+    "colorimetry",
+    "constants",
+    "media",
+    "montecarlo",
+    "photometry",
+    "radiometry",
+    "render",
+    "scattering",
+    "upsampling",
 )
 
+if TYPE_CHECKING:
+    from . import (
+        camera as camera,
+        colorimetry as colorimetry,
+        constants as constants,
+        media as media,
+        montecarlo as montecarlo,
+        photometry as photometry,
+        radiometry as radiometry,
+        render as render,
+        scattering as scattering,
+        upsampling as upsampling,
+    )
+
 __version__ = importlib.metadata.version("radiometria")
+__all__ = [*_SUBPACKAGES, "__version__"]
+
+
+def __getattr__(name: str):
+    if name in _SUBPACKAGES:
+        module = importlib.import_module(f"{__name__}.{name}")
+        globals()[name] = module
+        return module
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_SUBPACKAGES))
