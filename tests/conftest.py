@@ -4,6 +4,9 @@ import os
 
 # Tests must be deterministic and fail loudly on out-of-domain values, also under jit.
 os.environ.setdefault("EQX_ON_ERROR", "raise")
+# The command line's persistent compilation cache stays out of the user's cache directory
+# (tests/render/test_cache.py turns it on in a temporary one for its subprocesses).
+os.environ.setdefault("RADIOMETRIA_NO_CACHE", "1")
 
 import jax  # noqa: E402
 
