@@ -7,7 +7,7 @@ Subcommands:
 - `lut build --space NAME --res N --out FILE`, `lut check FILE`: RGB-to-spectrum tables.
 - `render SCENE --spp N --out FILE [--width W --height H --seed S --max-depth D
   --integrator NAME --sampler NAME --checkpoint FILE --checkpoint-every S --resume
-  --preview-every S]`.
+  --preview-every S --spectral]`.
 - `cache info`, `cache clear`: the persistent compilation cache.
 
 Every command except `cache` keeps XLA's compiled programs in the persistent compilation cache
@@ -191,6 +191,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--checkpoint-every", type=float, default=60.0, help="seconds between checkpoints [60]"
     )
     p.add_argument("--resume", action="store_true", help="continue from the checkpoint")
+    p.add_argument(
+        "--spectral",
+        action="store_true",
+        help="write the spectral radiance (47 bins of 10 nm, 360-830 nm) as a spectral OpenEXR "
+        "(Fichet et al. 2021 layout, with an RGB preview); implied by OUT named *.spectral.exr",
+    )
     p.add_argument(
         "--preview-every", type=float, default=None, help="rewrite OUT every S seconds [off]"
     )

@@ -312,7 +312,7 @@ def film_samples_to_spectral_bins(
     ok = (p > 0) & (wl >= lo) & (wl <= hi)
     value = jnp.where(ok, L / (jnp.where(ok, p, 1.0) * width), 0.0)  # (..., n_lambda)
     b = jnp.clip(jnp.floor((wl - lo) / width).astype(jnp.int32), 0, n - 1)
-    onehot = b[..., None] == jnp.arange(n, dtype=jnp.int32)  # (..., n_lambda, n)
+    onehot = b[..., None] == jnp.arange(n, dtype=jnp.int32).reshape((1,) * b.ndim + (n,))
     return jnp.sum(jnp.where(onehot, value[..., None], 0.0), axis=-2) / L.shape[-1]
 
 

@@ -3,6 +3,8 @@
 Everything a user can get wrong is checked before any rendering starts: the sample count, the
 image size, the depth, the output format (by extension: `.exr` is linear sRGB with float32
 channels R, G, B; `.png` is 8-bit sRGB-encoded) and whether the output can be written.
+`--spectral`, or an output named `*.spectral.exr`, writes the film's spectral radiance as well,
+in the OpenEXR layout of Fichet et al. (2021) (`radiometria.camera.write_spectral_exr`).
 """
 
 import argparse
@@ -12,7 +14,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from ..camera import write_exr, write_png
+from ..camera import write_exr, write_png, write_spectral_exr
 from ._cache import (
     clear_compilation_cache,
     compilation_cache_dir,
@@ -33,6 +35,7 @@ __all__ = [
 ]
 
 MAX_IMAGE_SIDE = 16384  # px: the command line refuses larger images (the library checks memory)
+SPECTRAL_BINS = 47  # --spectral: 10 nm bins over [360, 830] nm
 _FORMATS = (".exr", ".png")
 
 
@@ -69,7 +72,19 @@ def _check_int(value, name: str, low: int, high: int | None = None) -> int | Non
     return value
 
 
+def _is_spectral(path: Path, spectral: bool) -> bool:
+    """Whether the output is a spectral EXR (`--spectral` or a name ending `.spectral.exr`)."""
+    named = path.name.lower().endswith(".spectral.exr")
+    if (spectral or named) and path.suffix.lower() != ".exr":
+        raise ValueError(f"--spectral writes OpenEXR: output {str(path)!r} must end in .exr.")
+    return spectral or named
+
+
 def _write(path: Path, rgb, metadata: dict) -> Path:
+    if isinstance(rgb, tuple):  # a spectral render: (image, spectral, wavelengths_nm)
+        image, spectral, wavelengths_nm = rgb
+        meta = {**metadata, "spectral_bins": int(spectral.shape[-1])}
+        return write_spectral_exr(path, spectral, wavelengths_nm, rgb=image, metadata=meta)
     if path.suffix.lower() == ".exr":
         return write_exr(path, rgb, metadata)
     return write_png(path, rgb)
@@ -164,6 +179,12 @@ def render_command(args: argparse.Namespace) -> int:
     seed = _check_int(args.seed, "seed", 0, 2**31 - 1)
     max_depth = _check_int(args.max_depth, "max_depth", 1, 1024)
     out = _check_output(args.out)
+    spectral = _is_spectral(out, bool(getattr(args, "spectral", False)))
+    if spectral and (args.checkpoint or args.resume):
+        raise ValueError(
+            "--spectral cannot be combined with --checkpoint or --resume (checkpoints hold the "
+            "RGB film only)."
+        )
     for name in ("checkpoint_every", "preview_every"):
         value = getattr(args, name)
         if value is not None and not value >= 0:
@@ -171,6 +192,7 @@ def render_command(args: argparse.Namespace) -> int:
     checkpoint = (
         Path(args.checkpoint) if args.checkpoint else out.with_name(out.name + ".checkpoint.npz")
     )
+    extra = {"spectral_bins": SPECTRAL_BINS} if spectral else {}
     settings = dict(scene=str(args.scene), spp=spp, seed=seed)
 
     def preview(rgb, spp_reached):
@@ -187,11 +209,12 @@ def render_command(args: argparse.Namespace) -> int:
             integrator=args.integrator,
             sampler=args.sampler,
             defines=getattr(args, "define", None),
-            checkpoint=checkpoint,
+            checkpoint=None if spectral else checkpoint,
             checkpoint_every=args.checkpoint_every,
             resume=args.resume,
             preview=preview if args.preview_every is not None else None,
             preview_every=args.preview_every or 0.0,
+            **extra,
         )
     except RenderInterrupted as stop:
         _write(out, stop.image, {**settings, "spp_reached": int(stop.spp_reached)})
