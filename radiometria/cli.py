@@ -180,9 +180,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--sampler",
-        default="sobol",
+        default=None,
         help="sampler plugin: 'sobol' (padded Owen-scrambled Sobol, the lowest error per unit "
-        "time) or 'independent' [sobol]",
+        "time) or 'independent' [the scene file's sampler, else sobol]",
     )
     p.add_argument(
         "--checkpoint", default=None, help="checkpoint file [OUT.checkpoint.npz beside the output]"

@@ -229,3 +229,37 @@ def test_sigkill_then_resume_is_bit_identical(tmp_path):
     assert done.returncode == 0, done.stderr
     image, _ = read_exr(tmp_path / "x.exr")
     np.testing.assert_array_equal(image, _uninterrupted(tmp_path, spp))
+
+
+@pytest.mark.parametrize(
+    "sampler_xml, flag, expected",
+    [
+        ('<sampler type="independent"/>', None, "independent"),  # the file's sampler
+        ('<sampler type="ldsampler"/>', None, "sobol"),  # Mitsuba's name, mapped
+        ("", None, "sobol"),  # none in the file: the lowest-error sampler
+        ('<sampler type="independent"/>', "sobol", "sobol"),  # --sampler wins
+    ],
+)
+def test_render_command_picks_flag_then_file_then_sobol(
+    tmp_path, monkeypatch, sampler_xml, flag, expected
+):
+    from radiometria.render import _cli
+
+    seen = {}
+
+    def fake_render(description, **kwargs):
+        seen["sampler"] = kwargs["sampler"]
+        return np.zeros((2, 2, 3))
+
+    monkeypatch.setattr(_cli, "render", fake_render)
+    scene = tmp_path / "s.xml"
+    scene.write_text(
+        '<scene version="3.0.0"><sensor type="perspective">'
+        f'<float name="fov" value="40"/>{sampler_xml}</sensor>'
+        '<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/>'
+        "</emitter></shape></scene>"
+    )
+    _, meta = _cli._render_to(
+        str(scene), spp=1, width=2, height=2, seed=0, max_depth=None, sampler=flag
+    )
+    assert seen["sampler"].NAME == expected and meta["sampler"] == expected

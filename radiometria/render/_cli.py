@@ -24,7 +24,7 @@ from ._cache import (
 from ._driver import RenderInterrupted, render
 from ._integrators import AbstractIntegrator
 from ._registry import SAMPLERS
-from ._scenes import load_scene, scene_integrator
+from ._scenes import load_scene, scene_integrator, scene_sampler
 
 __all__ = [
     "MAX_IMAGE_SIDE",
@@ -121,14 +121,14 @@ def _render_to(
     seed,
     max_depth,
     integrator=None,
-    sampler="sobol",
+    sampler=None,
     progress=True,
     defines=None,
     **long_render,
 ):
     """Render a scene as the command line does; `long_render` are `render`'s checkpoint and
     preview arguments, `defines` the `-D name=value` parameters of an XML scene."""
-    if sampler not in SAMPLERS:
+    if sampler is not None and sampler not in SAMPLERS:
         raise ValueError(f"--sampler must be one of {sorted(SAMPLERS)}, got {sampler!r}.")
     params = _defines(defines)
     if params and not str(scene_name).lower().endswith(".xml"):
@@ -138,6 +138,10 @@ def _render_to(
         )
     description = load_scene(scene_name, params=params or None)
     chosen = _integrator(description, integrator, max_depth)
+    # --sampler, else the file's sampler, else the one with the lowest error per unit time.
+    chosen_sampler = (
+        scene_sampler(description, default="sobol") if sampler is None else SAMPLERS[sampler]()
+    )
     rgb = render(
         description,
         spp=spp,
@@ -145,7 +149,7 @@ def _render_to(
         width=width,
         height=height,
         integrator=chosen,
-        sampler=SAMPLERS[sampler](),
+        sampler=chosen_sampler,
         progress=progress,
         **long_render,
     )
@@ -155,7 +159,7 @@ def _render_to(
         "spp": int(spp),
         "seed": int(seed),
         "integrator": chosen.NAME,
-        "sampler": sampler,
+        "sampler": chosen_sampler.NAME,
         "colorspace": "linear sRGB (Rec. 709 primaries, D65)",
     }
     if max_depth is not None:

@@ -190,15 +190,18 @@ def compile_scene(
     return scene, scene_camera(description, width, height), scene_filter(description)
 
 
-def scene_sampler(description: SceneDescription) -> AbstractSampler:
+def scene_sampler(
+    description: SceneDescription, *, default: str = "independent"
+) -> AbstractSampler:
     """The sampler the scene file asks for (`SAMPLERS` registry: `Independent` or, for
-    Mitsuba's `stratified`, `multijitter`, `ldsampler` and `sobol`, `OwenSobol`)."""
-    if description.sampler not in SAMPLERS:
+    Mitsuba's `stratified`, `multijitter`, `ldsampler` and `sobol`, `OwenSobol`), or the
+    sampler named `default` where the file names none (Mitsuba's default, `independent`)."""
+    name = default if description.sampler is None else description.sampler
+    if name not in SAMPLERS:
         raise ValueError(
-            f"{description.source or 'scene'}: sampler {description.sampler!r}; supported: "
-            f"{', '.join(SAMPLERS)}."
+            f"{description.source or 'scene'}: sampler {name!r}; supported: {', '.join(SAMPLERS)}."
         )
-    return SAMPLERS[description.sampler]()
+    return SAMPLERS[name]()
 
 
 def scene_camera(description: SceneDescription, width=None, height=None) -> AbstractCamera:

@@ -266,7 +266,9 @@ class SceneDescription:
         `(("hide_emitters", True),)`), passed to its `from_properties`.
     - `spp`: samples per pixel the file asks for, or `None`.
     - `sampler`: the sampler the file asks for, a name of
-        `radiometria.render._registry.SAMPLERS` (Mitsuba's names; default `"independent"`).
+        `radiometria.render._registry.SAMPLERS` (Mitsuba's names), or `None` where it names
+        none (`render` then uses Mitsuba's default, `independent`; the command line its
+        lowest-error one, `sobol`).
     - `shape_names`: tuple of shape names.
     - `unit`: the length unit of the coordinates (e.g. `"mm"`), as a string.
     - `source`: where the scene came from (built-in name or path).
@@ -300,7 +302,7 @@ class SceneDescription:
     spp: int | None = None
     integrator: str = "path"
     integrator_params: tuple = ()
-    sampler: str = "independent"
+    sampler: str | None = None
     shape_names: tuple = ()
     unit: str = "scene units"
     source: str = ""

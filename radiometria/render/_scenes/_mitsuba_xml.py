@@ -817,7 +817,7 @@ def _sensor(ctx: _Ctx, node: _Node):
         far_clip=float(props.get("far_clip", 1e4)),
     )
     film = FilmDescription(width=768, height=576)
-    spp, sampler = None, "independent"
+    spp, sampler = None, None  # None: the file names no sampler
     for ch in node.children:
         if ch.tag == "film":
             film = _film(ctx, ch)
@@ -1011,7 +1011,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     lights: list[LightDescription] = []
     camera = CameraDescription(to_world=np.eye(4), fov_deg=45.0, fov_axis="x")
     film = FilmDescription(width=768, height=576)
-    spp, sampler = None, "independent"
+    spp, sampler = None, None  # None: the file names no sampler
     max_depth: int | None = None
     rr_depth = 5
     integrator = "path"
