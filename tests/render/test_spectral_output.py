@@ -182,3 +182,29 @@ def test_spectral_output_is_refused_where_it_cannot_be_written(tmp_path, capsys)
                  "--out", str(tmp_path / "x.exr")]) == 2  # fmt: skip
     assert "--checkpoint or --resume" in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
+
+
+def test_render_refuses_bad_spectral_bins_before_rendering(tmp_path, monkeypatch):
+    from radiometria.render import _driver, render
+    from radiometria.render._integrators import PTracer
+
+    scene = tmp_path / "scene.xml"
+    scene.write_text(SCENE)
+    for bad, error, message in (
+        (0, ValueError, r"\[1, 4710\].*got 0"),
+        (4711, ValueError, r"\[1, 4710\].*got 4711"),
+        (4.0, TypeError, "int"),
+        (True, TypeError, "int"),
+    ):
+        with pytest.raises(error, match=message):
+            render(scene, spp=1, spectral_bins=bad, progress=False)
+    with pytest.raises(ValueError, match="PTracer"):
+        render(scene, spp=1, spectral_bins=8, integrator=PTracer(), progress=False)
+    with pytest.raises(ValueError, match="checkpoint"):
+        render(scene, spp=1, spectral_bins=8, checkpoint=tmp_path / "c.npz", progress=False)
+    # 16 x 16 pixels x (48 + 12 x 47) B = 153 KiB: refused with 200 KiB available (half of it
+    # may go to the film), which is plenty for the RGB film's 12 KiB.
+    monkeypatch.setattr(_driver, "_available_host_memory", lambda: 200 * 1024)
+    monkeypatch.setattr(_driver, "Film", lambda *a, **k: pytest.fail("film allocated"))
+    with pytest.raises(ValueError, match=r"612 bytes per pixel, 47 spectral bins"):
+        render(scene, spp=1, spectral_bins=47, progress=False)
