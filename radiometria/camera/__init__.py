@@ -24,7 +24,10 @@ Conventions (Mitsuba 3's, which the reference scenes use):
   (Mitsuba's spectral film normalisation: a constant spectrum $L = 1$ gives $Y = 1$).
 """
 
-from ._base import AbstractCamera as AbstractCamera
+from ._base import (
+    AbstractCamera as AbstractCamera,
+    CameraWiSample as CameraWiSample,
+)
 from ._film import (
     Film as Film,
     SpectralResponse as SpectralResponse,

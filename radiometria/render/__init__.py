@@ -56,6 +56,7 @@ from ._integrators import (
     AbstractIntegrator as AbstractIntegrator,
     Direct as Direct,
     Path as Path,
+    PTracer as PTracer,
     path_radiance as path_radiance,
     sample_dimensions as sample_dimensions,
 )
