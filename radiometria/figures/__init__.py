@@ -12,6 +12,7 @@ from .._checks import check_choice
 from . import (
     _camera,
     _colorimetry,
+    _media,
     _montecarlo,
     _photometry,
     _radiometry,
@@ -21,7 +22,8 @@ from . import (
 )
 from ._registry import FIGURES as FIGURES, figure as figure, save as save
 
-del _camera, _colorimetry, _montecarlo, _photometry, _radiometry, _render, _scattering, _upsampling
+del _camera, _colorimetry, _media, _montecarlo, _photometry, _radiometry, _render, _scattering
+del _upsampling
 
 
 def make_figures(
