@@ -89,7 +89,8 @@ def fig_4_transmittance_estimators(out_dir, *, smoke: bool = False) -> list[Path
     b.plot(tau, d["T"] * (1 - d["T"]), "k:", lw=1, label=r"$T(1-T)$")
     for (name, label), marker in zip(labels.items(), "os^", strict=True):
         a.plot(tau, d[name]["mean"], marker, ms=4, mfc="none", label=label)
-        b.plot(tau, d[name]["var"], marker + "-", ms=4, mfc="none", label=label)
+        var = np.where(d[name]["var"] > 0, d[name]["var"], np.nan)  # none seen: off the log axis
+        b.plot(tau, var, marker + "-", ms=4, mfc="none", label=label)
     a.set(xscale="log", yscale="log", xlabel=r"optical depth $\tau$", ylabel="mean estimate")
     b.set(xscale="log", yscale="log", xlabel=r"optical depth $\tau$", ylabel="variance")
     a.set_title(f"Transmittance estimators ({d['n']} estimates per depth)")
@@ -133,6 +134,7 @@ def fig_4_phase_lobes(out_dir, *, smoke: bool = False) -> list[Path]:
         lin.plot(np.degrees(theta), p, label=f"g = {g}")
     polar.set_title(r"$\log_{10} p + 3$ (light travels towards $\theta = 0$)")
     polar.set_rlim(0, None)
+    polar.set_rlabel_position(200)
     lin.set(yscale="log", xlabel=r"scattering angle $\theta$ [deg]", ylabel=r"$p$ [sr$^{-1}$]")
     lin.set_title("Henyey-Greenstein phase function")
     lin.legend(frameon=False)
