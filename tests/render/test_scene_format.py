@@ -169,3 +169,32 @@ def test_cli_define_sets_defaults(tmp_path, capsys):
     argv = ["render", "cornell-box", "--spp", "1", "--out", str(out), "-D", "w=3"]
     assert main(argv) == 2
     assert "is not an .xml scene" in capsys.readouterr().err
+
+
+def test_default_emission_is_mitsubas_d65_white(tmp_path):
+    """An emitter without its radiance/intensity emits Mitsuba's default, white as an
+    illuminant (D65, Y = 1), not an equal-energy spectrum (found by Mitsuba's own
+    `orthographic_sensor/test_orthographic.xml`: X 5 % high, Z 8 % low before the fix)."""
+    pytest.importorskip("mitsuba")
+    from radiometria.render import render
+
+    from ._mitsuba import mitsuba_moments
+
+    path = _write(
+        tmp_path / "sky.xml",
+        _scene(
+            '<emitter type="constant"/>\n<integrator type="path"/>\n'
+            '<shape type="rectangle"><transform name="to_world"><translate z="-5"/>'
+            "</transform></shape>\n"  # behind the camera: a scene needs a shape
+            '<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>'
+            '<integer name="height" value="8"/><rfilter type="box"/></film></sensor>'
+        ),
+    )
+    spp, ref_spp = 64, 256
+    mean, var = mitsuba_moments(path, ref_spp)
+    ours = np.asarray(render(path, spp=spp, return_xyz=True, progress=False), np.float64)
+    # the image means: standard error of both from Mitsuba's per-sample variance
+    n = mean.shape[0] * mean.shape[1]
+    se = np.sqrt(var.mean((0, 1)) / n * (1 / spp + 1 / ref_spp))
+    diff = np.abs(ours.mean((0, 1)) - mean.mean((0, 1)))
+    assert np.all(diff < 4 * se + 1e-3), (ours.mean((0, 1)), mean.mean((0, 1)), se)

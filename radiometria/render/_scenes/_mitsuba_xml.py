@@ -568,6 +568,14 @@ def _emitter(ctx: _Ctx, node: _Node) -> dict:
     return {"radiance": props["radiance"], "two_sided": False}
 
 
+_DEFAULT_EMISSION = {
+    "constant": "radiance",
+    "point": "intensity",
+    "spot": "intensity",
+    "directional": "irradiance",
+}
+
+
 def _light(ctx: _Ctx, node: _Node) -> LightDescription:
     """An emitter outside a shape: `point`, `spot`, `directional`, `constant`, `envmap` with
     the parameters its plugin declares; an envmap's image is read here (`read_envmap`), so
@@ -575,6 +583,11 @@ def _light(ctx: _Ctx, node: _Node) -> LightDescription:
     lights = {k: v for k, v in LIGHTS.items() if k != "area"}
     kind, props = _plugin(ctx, node, lights, "emitter (outside a <shape>)")
     where = f"{node.file or ctx.file}:{node.line}: <emitter type='{kind}'>"
+    # Mitsuba's default emission is white light as an illuminant (its `texture_d65(name, 1)`:
+    # D65 with Y = 1), not an equal-energy spectrum (a plain `1` would be one).
+    default = _DEFAULT_EMISSION.get(kind)
+    if default is not None and default not in props:
+        props[default] = LinearRGB(np.ones(3))
     if kind == "envmap":
         if "filename" not in props:
             raise ctx.err(node, "an envmap emitter needs a 'filename'")
