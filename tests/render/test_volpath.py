@@ -251,9 +251,9 @@ def test_semi_infinite_medium_reflectance_chandrasekhar(albedo):
 @functools.cache
 def _gradient_setup():
     """A slab of extinction 0.8 and albedo 1 before an emitter, in float64, the rays,
-    wavelengths and variates of 1024 paths, and two jitted functions of scales (s, a) of
-    sigma_t and of the albedo: the per-path radiance and the gradient of its mean (one
-    compilation each, shared by the gradient tests)."""
+    wavelengths and variates of 1024 paths, and one jitted function of scales (s, a) of
+    sigma_t and of the albedo returning the mean radiance, its gradient in (s, a) and the
+    per-path radiance (one compilation, shared by the gradient tests)."""
     f64 = jnp.float64
     slab = _box([-50, -50, 0.5], [50, 50, 1.5])
     light = _box([-50, -50, 2.0], [50, 50, 2.5])
@@ -291,9 +291,11 @@ def _gradient_setup():
             sc, o, d, lam, u[:, 1:], max_depth=depth, rr_depth=depth, compact=False, max_null=3
         )
 
-    per_path = jax.jit(radiance)
-    grad = jax.jit(jax.grad(lambda s, a: jnp.mean(radiance(s, a)), argnums=(0, 1)))
-    return per_path, grad
+    def mean(s, a):
+        values = radiance(s, a)
+        return jnp.mean(values), values
+
+    return jax.jit(jax.value_and_grad(mean, argnums=(0, 1), has_aux=True))
 
 
 @pytest.mark.slow
@@ -301,12 +303,12 @@ def test_gradient_wrt_sigma_t_matches_beer_lambert():
     """`jax.grad` of an absorbing slab's radiance w.r.t. a scale s of sigma_t (reverse mode,
     detached free-flight sampling): its mean over paths is d/ds [L exp(-s sigma_t l)] =
     -sigma_t l L exp(-sigma_t l) at s = 1, l the path length in the slab."""
-    per_path, grad = _gradient_setup()
-    g = float(grad(1.0, 0.0)[0])  # albedo 0: purely absorbing
+    (_, values), (g, _) = _gradient_setup()(1.0, 0.0)  # albedo 0: purely absorbing
+    g = float(g)
     length = np.linalg.norm([0.2, 0.1, 1.0])
     expected = -0.8 * length * 2.0 * np.exp(-0.8 * length)
     # each path's derivative is -sigma_t l x (its estimate), so its spread is known
-    values = np.asarray(per_path(1.0, 0.0))
+    values = np.asarray(values)
     stderr = 0.8 * length * values.mean(axis=1).std() / np.sqrt(values.shape[0])
     assert abs(g - expected) < 5 * stderr, (g, expected, stderr)
 
@@ -316,9 +318,9 @@ def test_gradient_wrt_albedo_matches_finite_differences():
     """The free-flight and phase samples do not depend on the albedo, so for fixed variates
     (no roulette) the estimate is smooth in it: `jax.grad` (reverse mode) at albedo 0.6
     equals central finite differences of the same estimate."""
-    per_path, grad = _gradient_setup()
-    g = float(grad(1.0, 0.6)[1])
+    run = _gradient_setup()
+    g = float(run(1.0, 0.6)[1][1])
     h = 1e-4
-    fd = float(np.mean(per_path(1.0, 0.6 + h)) - np.mean(per_path(1.0, 0.6 - h))) / (2 * h)
+    fd = float(run(1.0, 0.6 + h)[0][0] - run(1.0, 0.6 - h)[0][0]) / (2 * h)
     assert g > 0
     np.testing.assert_allclose(g, fd, rtol=1e-5)
