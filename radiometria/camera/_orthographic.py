@@ -10,10 +10,17 @@ sensor). Rays start on the near clip plane $z = n$, as Mitsuba's do.
 import equinox as eqx
 import jax.numpy as jnp
 
-from .._checks import as_float_array, check_last_axis, check_positive_int
+from .._checks import as_float_array, check_last_axis
 from .._types import Array, ArrayLike, Float
 from ._base import AbstractCamera
-from ._pinhole import _check_clip, _check_matrix4, look_at
+from ._pinhole import (
+    _check_camera_fields,
+    _check_clip,
+    _check_film_and_matrix,
+    _point_to_world,
+    _raster_to_ndc,
+    look_at,
+)
 
 
 class OrthographicCamera(AbstractCamera):
@@ -42,12 +49,7 @@ class OrthographicCamera(AbstractCamera):
     far_clip: Float[Array, ""] = eqx.field(default=1e4, converter=jnp.asarray)
 
     def __check_init__(self):
-        check_positive_int(self.width, "width")
-        check_positive_int(self.height, "height")
-        if jnp.shape(self.to_world) != (4, 4):
-            raise ValueError(
-                f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(self.to_world)}."
-            )
+        _check_camera_fields(self)
 
     @classmethod
     def from_to_world(
@@ -78,9 +80,7 @@ class OrthographicCamera(AbstractCamera):
         ??? cite "References"
             `Jakob2022` (`orthographic` sensor).
         """
-        width = check_positive_int(width, "width")
-        height = check_positive_int(height, "height")
-        m = _check_matrix4(to_world, "to_world")
+        m, width, height = _check_film_and_matrix(to_world, width, height)
         near, far = _check_clip(near_clip, far_clip)
         return cls(m, width, height, near, far)
 
@@ -135,11 +135,10 @@ class OrthographicCamera(AbstractCamera):
         dtype = xy.dtype
         m = self.to_world.astype(dtype)
         aspect = self.width / self.height
-        x = 1.0 - 2.0 * xy[..., 0] / self.width
-        y = (1.0 - 2.0 * xy[..., 1] / self.height) / aspect
+        x, y = _raster_to_ndc(xy, self.width, self.height)
+        y = y / aspect
         z = jnp.broadcast_to(self.near_clip.astype(dtype), x.shape)
         p = jnp.stack([x, y, z], axis=-1)
-        o = jnp.einsum("ij,...j->...i", m[:3, :3], p)
-        o = o + jnp.broadcast_to(m[:3, 3], o.shape)
+        o = _point_to_world(m, p)
         d = m[:3, 2] / jnp.linalg.norm(m[:3, 2])
         return o, jnp.broadcast_to(d, o.shape)

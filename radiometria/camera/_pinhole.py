@@ -76,6 +76,35 @@ def _check_clip(near, far) -> tuple[Array, Array]:
     return near, far
 
 
+def _check_camera_fields(camera) -> None:
+    """The checks every camera's `__check_init__` shares: film size and a 4x4 `to_world`."""
+    check_positive_int(camera.width, "width")
+    check_positive_int(camera.height, "height")
+    if jnp.shape(camera.to_world) != (4, 4):
+        raise ValueError(
+            f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(camera.to_world)}."
+        )
+
+
+def _check_film_and_matrix(to_world, width, height) -> tuple[Array, int, int]:
+    """`from_to_world`'s first checks, shared by the cameras: `(matrix, width, height)`."""
+    width = check_positive_int(width, "width")
+    height = check_positive_int(height, "height")
+    return _check_matrix4(to_world, "to_world"), width, height
+
+
+def _raster_to_ndc(xy: Array, width: int, height: int) -> tuple[Array, Array]:
+    """Raster positions (..., 2) [px] to `(x_ndc, y_ndc)` (x flipped: camera +x is the image's
+    left; y flipped: raster y is down)."""
+    return 1.0 - 2.0 * xy[..., 0] / width, 1.0 - 2.0 * xy[..., 1] / height
+
+
+def _point_to_world(m: Array, p: Array) -> Array:
+    """Camera-space points (..., 3) to world space by the 4x4 `to_world` matrix `m`."""
+    o = jnp.einsum("ij,...j->...i", m[:3, :3], p)
+    return o + jnp.broadcast_to(m[:3, 3], o.shape)
+
+
 def look_at(origin: ArrayLike, target: ArrayLike, up: ArrayLike) -> Float[Array, "4 4"]:
     r"""Camera-to-world matrix of a camera at `origin` looking at `target` (Mitsuba convention).
 
@@ -302,12 +331,7 @@ class PinholeCamera(AbstractCamera):
     far_clip: Float[Array, ""] = eqx.field(default=1e4, converter=jnp.asarray)
 
     def __check_init__(self):
-        check_positive_int(self.width, "width")
-        check_positive_int(self.height, "height")
-        if jnp.shape(self.to_world) != (4, 4):
-            raise ValueError(
-                f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(self.to_world)}."
-            )
+        _check_camera_fields(self)
         if jnp.shape(self.fov_x_deg) != ():
             raise ValueError(
                 f"`fov_x_deg` must be a scalar [deg], got shape {jnp.shape(self.fov_x_deg)}."
@@ -347,9 +371,7 @@ class PinholeCamera(AbstractCamera):
         ??? cite "References"
             `Jakob2022` (perspective sensor).
         """
-        width = check_positive_int(width, "width")
-        height = check_positive_int(height, "height")
-        m = _check_matrix4(to_world, "to_world")
+        m, width, height = _check_film_and_matrix(to_world, width, height)
         fx = fov_x_deg(fov_deg, width / height, fov_axis)
         near, far = _check_clip(near_clip, far_clip)
         return cls(m, fx, width, height, near, far)
@@ -541,9 +563,7 @@ def generate_ray(
     to_world = camera.to_world.astype(dtype)
     tan_x, tan_y = camera.tan_half_fov()
     tan_x, tan_y = tan_x.astype(dtype), tan_y.astype(dtype)
-    # Raster -> NDC: x flipped because camera +x is the image's left, y because raster y is down.
-    x_ndc = 1.0 - 2.0 * xy[..., 0] / camera.width
-    y_ndc = 1.0 - 2.0 * xy[..., 1] / camera.height
+    x_ndc, y_ndc = _raster_to_ndc(xy, camera.width, camera.height)
     d_cam = jnp.stack([x_ndc * tan_x, y_ndc * tan_y, jnp.ones_like(x_ndc)], axis=-1)
     d = jnp.einsum("ij,...j->...i", to_world[:3, :3], d_cam)
     d = d / jnp.linalg.norm(d, axis=-1, keepdims=True)

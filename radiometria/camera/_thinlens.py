@@ -15,11 +15,19 @@ start where they cross the near clip plane, and every ray has unit weight.
 import equinox as eqx
 import jax.numpy as jnp
 
-from .._checks import as_float_array, check_last_axis, check_positive_int
+from .._checks import as_float_array, check_last_axis
 from .._types import Array, ArrayLike, Float
 from ..montecarlo import sample_uniform_disk_concentric
 from ._base import AbstractCamera
-from ._pinhole import _check_clip, _check_matrix4, fov_x_deg, look_at
+from ._pinhole import (
+    _check_camera_fields,
+    _check_clip,
+    _check_film_and_matrix,
+    _point_to_world,
+    _raster_to_ndc,
+    fov_x_deg,
+    look_at,
+)
 
 
 def _check_lens(aperture_radius, focus_distance):
@@ -68,12 +76,7 @@ class ThinLensCamera(AbstractCamera):
     far_clip: Float[Array, ""] = eqx.field(default=1e4, converter=jnp.asarray)
 
     def __check_init__(self):
-        check_positive_int(self.width, "width")
-        check_positive_int(self.height, "height")
-        if jnp.shape(self.to_world) != (4, 4):
-            raise ValueError(
-                f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(self.to_world)}."
-            )
+        _check_camera_fields(self)
 
     @classmethod
     def from_to_world(
@@ -112,9 +115,7 @@ class ThinLensCamera(AbstractCamera):
         ??? cite "References"
             `Jakob2022` (`thinlens` sensor).
         """
-        width = check_positive_int(width, "width")
-        height = check_positive_int(height, "height")
-        m = _check_matrix4(to_world, "to_world")
+        m, width, height = _check_film_and_matrix(to_world, width, height)
         fx = fov_x_deg(fov_deg, width / height, fov_axis)
         r, f = _check_lens(aperture_radius, focus_distance)
         near, far = _check_clip(near_clip, far_clip)
@@ -203,8 +204,7 @@ class ThinLensCamera(AbstractCamera):
         m = self.to_world.astype(dtype)
         tan_x = jnp.tan(jnp.deg2rad(self.fov_x_deg.astype(dtype)) / 2)
         tan_y = tan_x * (self.height / self.width)
-        x_ndc = 1.0 - 2.0 * xy[..., 0] / self.width
-        y_ndc = 1.0 - 2.0 * xy[..., 1] / self.height
+        x_ndc, y_ndc = _raster_to_ndc(xy, self.width, self.height)
         f = self.focus_distance.astype(dtype)
         focus = jnp.stack(
             [x_ndc * tan_x * f, y_ndc * tan_y * f, jnp.broadcast_to(f, x_ndc.shape)], -1
@@ -217,7 +217,6 @@ class ThinLensCamera(AbstractCamera):
         d = focus - lens
         d = d / jnp.linalg.norm(d, axis=-1, keepdims=True)
         o = lens + d * (self.near_clip.astype(dtype) / d[..., 2:3])
-        o_w = jnp.einsum("ij,...j->...i", m[:3, :3], o)
-        o_w = o_w + jnp.broadcast_to(m[:3, 3], o_w.shape)
+        o_w = _point_to_world(m, o)
         d_w = jnp.einsum("ij,...j->...i", m[:3, :3], d)
         return o_w, d_w / jnp.linalg.norm(d_w, axis=-1, keepdims=True)
