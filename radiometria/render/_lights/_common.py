@@ -1,18 +1,23 @@
 """Helpers shared by the light plugins: illuminant spectra of scene values, picking one of a
-plugin's rows by power, and the checks of scene parameters."""
+plugin's rows by power, the checks of scene parameters, and the base of the delta lights."""
 
 import jax.numpy as jnp
 import numpy as np
 
+from ..._math import dot
 from ...upsampling import RGBIlluminantSpectrum
 from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
+from ._base import AbstractLight
 
 __all__ = [
+    "AbstractDeltaLight",
+    "direction_to_points",
     "illuminant_table",
     "pick_row",
     "row_cdf",
     "spectral_param",
     "to_world_param",
+    "vector_or_to_world_param",
     "vector_param",
 ]
 
@@ -57,6 +62,44 @@ def to_world_param(params: dict, where: str) -> np.ndarray:
     if not abs(np.linalg.det(m[:3, :3])) > 1e-12:
         raise ValueError(f"{where}: parameter 'to_world' is degenerate (singular 3x3 part).")
     return m
+
+
+def vector_or_to_world_param(params: dict, name: str, where: str, column: int) -> np.ndarray:
+    """The 3-vector parameter `name` or, without it, column `column` of `to_world` (3: its
+    translation, 2: its +z axis); giving both is an error."""
+    if name in params and "to_world" in params:
+        raise ValueError(f"{where}: give '{name}' or 'to_world', not both.")
+    if name in params:
+        return vector_param(params, name, where)
+    return to_world_param(params, where)[:3, column]
+
+
+def direction_to_points(position, p):
+    """Unit directions `wi` (n, 3) from the shading points `p` (n, 3) to the light positions
+    `position` (n, 3) [scene units], the distances and their squares (n,), and `ok` where the
+    distance is > 0 (there `wi` is 0)."""
+    to_light = position - p
+    dist2 = dot(to_light, to_light)
+    dist = jnp.sqrt(dist2)
+    ok = dist > 0
+    return to_light / jnp.where(ok, dist, 1.0)[:, None], dist, dist2, ok
+
+
+class AbstractDeltaLight(AbstractLight):
+    """Lights that no ray can hit (point, spot, directional): no emission at surface hits or
+    along escaped rays, and zero solid-angle densities for MIS."""
+
+    def pdf_li(self, face, dist, cos_light):
+        return jnp.zeros(face.shape, dist.dtype)
+
+    def emitted(self, face, cos_o, valid, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
+
+    def emitted_escaped(self, directions, escaped, wavelength_nm):
+        return jnp.zeros(wavelength_nm.shape, directions.dtype)
+
+    def pdf_escaped(self, directions):
+        return jnp.zeros(directions.shape[:-1], directions.dtype)
 
 
 def illuminant_table(rows: list[np.ndarray], dtype) -> SpectrumTable:

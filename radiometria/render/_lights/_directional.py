@@ -8,18 +8,18 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._spectral import SpectrumTable
-from ._base import AbstractLight, LightSample
+from ._base import LightSample
 from ._common import (
+    AbstractDeltaLight,
     illuminant_table,
     pick_row,
     row_cdf,
     spectral_param,
-    to_world_param,
-    vector_param,
+    vector_or_to_world_param,
 )
 
 
-class DirectionalLight(AbstractLight):
+class DirectionalLight(AbstractDeltaLight):
     r"""Directional lights: every `directional` emitter of a scene, one row each.
 
     A directional light of irradiance $E$ (on a surface facing it) travelling along $d$ gives
@@ -57,9 +57,7 @@ class DirectionalLight(AbstractLight):
         raise `ValueError` naming `where`."""
         dirs, rows = [], []
         for p, w in zip(params, where, strict=True):
-            if "direction" in p and "to_world" in p:
-                raise ValueError(f"{w}: give 'direction' or 'to_world', not both.")
-            d = vector_param(p, "direction", w) if "direction" in p else to_world_param(p, w)[:3, 2]
+            d = vector_or_to_world_param(p, "direction", w, 2)
             norm = np.linalg.norm(d)
             if not norm > 0:
                 raise ValueError(f"{w}: the light's direction is zero.")
@@ -83,18 +81,6 @@ class DirectionalLight(AbstractLight):
             pdf=prob,
             delta=jnp.ones((n,), bool),
         )
-
-    def pdf_li(self, face, dist, cos_light):
-        return jnp.zeros(face.shape, dist.dtype)
-
-    def emitted(self, face, cos_o, valid, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
-
-    def emitted_escaped(self, directions, escaped, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, directions.dtype)
-
-    def pdf_escaped(self, directions):
-        return jnp.zeros(directions.shape[:-1], directions.dtype)
 
     def power(self, scene_radius: float) -> float:
         return float(np.pi * scene_radius**2 * self.mean_irradiance)

@@ -7,21 +7,21 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..._math import dot
 from ...montecarlo import sample_uniform_sphere
 from .._spectral import SpectrumTable
-from ._base import AbstractLight, EmissionSample, LightSample
+from ._base import EmissionSample, LightSample
 from ._common import (
+    AbstractDeltaLight,
+    direction_to_points,
     illuminant_table,
     pick_row,
     row_cdf,
     spectral_param,
-    to_world_param,
-    vector_param,
+    vector_or_to_world_param,
 )
 
 
-class PointLight(AbstractLight):
+class PointLight(AbstractDeltaLight):
     r"""Isotropic point lights: every `point` emitter of a scene, one row each.
 
     A point of intensity $I$ at $x$ gives a shading point $p$ the irradiance
@@ -62,12 +62,7 @@ class PointLight(AbstractLight):
         (its translation), not both. Bad values raise `ValueError` naming `where`."""
         pos, rows = [], []
         for p, w in zip(params, where, strict=True):
-            if "position" in p and "to_world" in p:
-                raise ValueError(f"{w}: give 'position' or 'to_world', not both.")
-            if "position" in p:
-                pos.append(vector_param(p, "position", w))
-            else:
-                pos.append(to_world_param(p, w)[:3, 3])
+            pos.append(vector_or_to_world_param(p, "position", w, 3))
             rows.append(spectral_param(p, "intensity", w))
         mean = np.array([r.mean() for r in rows])
         return cls(
@@ -79,11 +74,7 @@ class PointLight(AbstractLight):
 
     def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
         j, prob, _ = pick_row(self.cdf, u_select)
-        to_light = self.position[j] - p
-        dist2 = dot(to_light, to_light)
-        dist = jnp.sqrt(dist2)
-        ok = dist > 0
-        wi = to_light / jnp.where(ok, dist, 1.0)[:, None]
+        wi, dist, dist2, ok = direction_to_points(self.position[j], p)
         le = self.intensity(j, wavelength_nm) / jnp.where(ok, dist2, 1.0)[:, None]
         return LightSample(
             wi=wi,
@@ -92,18 +83,6 @@ class PointLight(AbstractLight):
             pdf=jnp.where(ok, prob, 0.0),
             delta=jnp.ones(dist.shape, bool),
         )
-
-    def pdf_li(self, face, dist, cos_light):
-        return jnp.zeros(face.shape, dist.dtype)
-
-    def emitted(self, face, cos_o, valid, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
-
-    def emitted_escaped(self, directions, escaped, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, directions.dtype)
-
-    def pdf_escaped(self, directions):
-        return jnp.zeros(directions.shape[:-1], directions.dtype)
 
     def power(self, scene_radius: float) -> float:
         return self.phi

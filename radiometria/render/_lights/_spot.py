@@ -10,8 +10,16 @@ from jaxtyping import Array, Float
 from ..._math import dot
 from ...montecarlo import sample_uniform_cone
 from .._spectral import SpectrumTable
-from ._base import AbstractLight, EmissionSample, LightSample
-from ._common import illuminant_table, pick_row, row_cdf, spectral_param, to_world_param
+from ._base import EmissionSample, LightSample
+from ._common import (
+    AbstractDeltaLight,
+    direction_to_points,
+    illuminant_table,
+    pick_row,
+    row_cdf,
+    spectral_param,
+    to_world_param,
+)
 
 
 def spot_falloff(cos_theta, cutoff, beam_width):
@@ -42,7 +50,7 @@ def spot_falloff(cos_theta, cutoff, beam_width):
     return xp.where(c > xp.cos(cutoff), inside, 0.0)
 
 
-class SpotLight(AbstractLight):
+class SpotLight(AbstractDeltaLight):
     r"""Spot lights: every `spot` emitter of a scene, one row each.
 
     A spot at the origin of its `to_world` frame shines along the frame's +z axis with
@@ -118,17 +126,17 @@ class SpotLight(AbstractLight):
             phi=float(np.sum(powers)),
         )
 
+    def _falloff(self, j, w):
+        """The falloff of spots `j` (n,) along world directions `w` (n, 3) from their apexes."""
+        local = jnp.einsum("nij,nj->ni", self.world_to_local[j], w)
+        cos = local[:, 2] / jnp.sqrt(jnp.maximum(dot(local, local), 1e-30))
+        return spot_falloff(cos, self.cutoff[j], self.beam_width[j])
+
     def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
         j, prob, _ = pick_row(self.cdf, u_select)
-        to_light = self.position[j] - p
-        dist2 = dot(to_light, to_light)
-        dist = jnp.sqrt(dist2)
-        ok = dist > 0
-        wi = to_light / jnp.where(ok, dist, 1.0)[:, None]
+        wi, dist, dist2, ok = direction_to_points(self.position[j], p)
         # The direction from the apex to p in the spot's frame (Mitsuba: to_world^-1 (-wi)).
-        local = jnp.einsum("nij,nj->ni", self.world_to_local[j], -wi)
-        cos_theta = local[:, 2] / jnp.sqrt(jnp.maximum(dot(local, local), 1e-30))
-        falloff = spot_falloff(cos_theta, self.cutoff[j], self.beam_width[j])
+        falloff = self._falloff(j, -wi)
         scale = falloff / jnp.where(ok, dist2, 1.0)
         le = self.intensity(j, wavelength_nm) * scale[:, None]
         ok = ok & (falloff > 0)
@@ -139,18 +147,6 @@ class SpotLight(AbstractLight):
             pdf=jnp.where(ok, prob, 0.0),
             delta=jnp.ones(dist.shape, bool),
         )
-
-    def pdf_li(self, face, dist, cos_light):
-        return jnp.zeros(face.shape, dist.dtype)
-
-    def emitted(self, face, cos_o, valid, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
-
-    def emitted_escaped(self, directions, escaped, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, directions.dtype)
-
-    def pdf_escaped(self, directions):
-        return jnp.zeros(directions.shape[:-1], directions.dtype)
 
     def power(self, scene_radius: float) -> float:
         return self.phi
@@ -167,20 +163,14 @@ class SpotLight(AbstractLight):
         d = jnp.einsum("nij,nj->ni", to_world, local)
         d = d / jnp.sqrt(dot(d, d))[:, None]
         intensity = self.intensity(j, wavelength_nm)
-
-        def falloff(w):
-            loc = jnp.einsum("nij,nj->ni", self.world_to_local[j], w)
-            cos = loc[:, 2] / jnp.sqrt(jnp.maximum(dot(loc, loc), 1e-30))
-            return spot_falloff(cos, self.cutoff[j], self.beam_width[j])
-
         to_obs = observer - self.position[j]
         return EmissionSample(
             p=self.position[j],
             n=jnp.zeros_like(d),
             d=d,
-            le=intensity * falloff(d)[:, None],
+            le=intensity * self._falloff(j, d)[:, None],
             pdf_pos=prob,
             pdf_dir=1.0 / (2.0 * jnp.pi * (1.0 - cos_max)),
-            le_observer=intensity * falloff(to_obs)[:, None],
+            le_observer=intensity * self._falloff(j, to_obs)[:, None],
             delta_pos=jnp.ones(prob.shape, bool),
         )
