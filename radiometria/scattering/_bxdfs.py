@@ -226,6 +226,24 @@ class AbstractBxDF(eqx.Module):
         """Solid-angle density of `sample_f` producing `wi` (0 for delta lobes), `(...)`. [sr^-1]"""
 
 
+class _AbstractDeltaBxDF(AbstractBxDF):
+    """A BxDF of delta lobes only (smooth conductor, dielectric, thin dielectric): `f` and
+    `pdf` are 0, shaped by the directions and the spectral `eta` field."""
+
+    eta: eqx.AbstractVar[Array]
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
+        return jnp.zeros(batch + self.eta.shape[-1:], self.eta.dtype)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
+        return jnp.zeros(batch, jnp.result_type(wo.dtype, self.eta.dtype))
+
+
 # --------------------------------------------------------------------------------------------
 # Lambertian
 
@@ -626,7 +644,7 @@ class RetroreflectiveBxDF(AbstractBxDF):
 # Smooth conductor
 
 
-class ConductorBxDF(AbstractBxDF):
+class ConductorBxDF(_AbstractDeltaBxDF):
     r"""Smooth conductor: perfect specular reflection weighted by the conductor Fresnel term.
 
     $f(\omega_o, \omega_i) = F_r(\cos\theta_o; \eta, \kappa)\,
@@ -654,17 +672,6 @@ class ConductorBxDF(AbstractBxDF):
         eta = _check_eta(_spectral(eta, "eta"))
         k = _check_k(_spectral(k, "k"))
         self.eta, self.k = _spectral_pair(eta, k)
-
-    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
-        _check_mode(mode)
-        wo, wi = _dirs(("wo", wo), ("wi", wi))
-        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
-        return jnp.zeros(batch + self.eta.shape[-1:], self.eta.dtype)
-
-    def pdf(self, wo, wi) -> Array:
-        wo, wi = _dirs(("wo", wo), ("wi", wi))
-        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
-        return jnp.zeros(batch, jnp.result_type(wo.dtype, self.eta.dtype))
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
         _check_mode(mode)
@@ -705,7 +712,7 @@ def _hero_only(x: Array) -> Array:
     return jnp.where(mask, x, 0.0)
 
 
-class DielectricBxDF(AbstractBxDF):
+class DielectricBxDF(_AbstractDeltaBxDF):
     r"""Smooth dielectric interface: specular reflection and refraction (thesis 3.1.1).
 
     One of the two delta lobes is chosen with probability $F_r$ (reflection, thesis eq. 3.18)
@@ -743,17 +750,6 @@ class DielectricBxDF(AbstractBxDF):
     def __init__(self, eta, *, dispersion: bool | None = None):
         self.eta = _check_eta(_spectral(eta, "eta"))
         self.dispersion = _detect_dispersion(self.eta, dispersion)
-
-    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
-        _check_mode(mode)
-        wo, wi = _dirs(("wo", wo), ("wi", wi))
-        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
-        return jnp.zeros(batch + self.eta.shape[-1:], self.eta.dtype)
-
-    def pdf(self, wo, wi) -> Array:
-        wo, wi = _dirs(("wo", wo), ("wi", wi))
-        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
-        return jnp.zeros(batch, jnp.result_type(wo.dtype, self.eta.dtype))
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
         _check_mode(mode)

@@ -16,8 +16,8 @@ from jax import Array
 from .._checks import as_float_array
 from .._math import safe_div
 from ._bxdfs import (
-    AbstractBxDF,
     BSDFSample,
+    _AbstractDeltaBxDF,
     _broadcast,
     _check_mode,
     _dirs,
@@ -57,7 +57,7 @@ def thin_slab_reflectance(cos_theta, eta) -> Array:
     return jnp.where(r < 1.0, r + t * t * safe_div(r, 1.0 - r * r), 1.0)
 
 
-class ThinDielectricBxDF(AbstractBxDF):
+class ThinDielectricBxDF(_AbstractDeltaBxDF):
     r"""Thin dielectric slab: delta reflection with probability $R'$ (mirror direction) and
     delta transmission straight through with probability $1 - R'$ (`thin_slab_reflectance`).
 
@@ -87,17 +87,6 @@ class ThinDielectricBxDF(AbstractBxDF):
         self.eta = _check_eta(_spectral(eta, "eta"))
         self.specular_reflectance = _spectral(specular_reflectance, "specular_reflectance")
         self.specular_transmittance = _spectral(specular_transmittance, "specular_transmittance")
-
-    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
-        _check_mode(mode)
-        wo, wi = _dirs(("wo", wo), ("wi", wi))
-        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
-        return jnp.zeros(batch + self.eta.shape[-1:], self.eta.dtype)
-
-    def pdf(self, wo, wi) -> Array:
-        wo, wi = _dirs(("wo", wo), ("wi", wi))
-        batch, _ = _broadcast((wo, 1), (wi, 1), (self.eta, 1))
-        return jnp.zeros(batch, jnp.result_type(wo.dtype, self.eta.dtype))
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
         _check_mode(mode)
