@@ -25,7 +25,29 @@ def dielectric_textures(params: Properties, where: str) -> tuple[ConstantTexture
     return eta, *factors
 
 
-class Dielectric(AbstractMaterial):
+class _AbstractSmoothDielectric(AbstractMaterial):
+    """The parameters, fields and loading that `Dielectric` and `ThinDielectric` share:
+    `eta` and the two lobe factors as textures (`dielectric_textures`); with
+    `ALWAYS_TWO_SIDED`, both sides scatter whatever the scene's `twosided` says."""
+
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
+        {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
+    )
+    TRANSMISSIVE: ClassVar[bool] = True
+    ALWAYS_TWO_SIDED: ClassVar[bool] = False
+    eta: AbstractTexture
+    specular_reflectance: AbstractTexture
+    specular_transmittance: AbstractTexture
+    two_sided: Bool[Array, " m"]
+
+    @classmethod
+    def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
+        unknown_parameters(params, cls, where)
+        two_sided = True if cls.ALWAYS_TWO_SIDED else two_sided
+        return cls(*dielectric_textures(params, where), jnp.asarray([two_sided], bool))
+
+
+class Dielectric(_AbstractSmoothDielectric):
     """Smooth dielectric interfaces (Mitsuba's `dielectric`): Fresnel reflection and Snell
     refraction, dispersive when the index varies with wavelength.
 
@@ -45,19 +67,6 @@ class Dielectric(AbstractMaterial):
     """
 
     NAME: ClassVar[str] = "dielectric"
-    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
-        {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
-    )
-    TRANSMISSIVE: ClassVar[bool] = True
-    eta: AbstractTexture
-    specular_reflectance: AbstractTexture
-    specular_transmittance: AbstractTexture
-    two_sided: Bool[Array, " m"]
-
-    @classmethod
-    def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
-        unknown_parameters(params, cls, where)
-        return cls(*dielectric_textures(params, where), jnp.asarray([two_sided], bool))
 
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
         eta = jnp.maximum(self.eta(row, wavelength_nm), 1e-3)

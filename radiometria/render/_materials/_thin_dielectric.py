@@ -3,15 +3,13 @@
 from typing import ClassVar
 
 import jax.numpy as jnp
-from jaxtyping import Array, Bool, Float, Int
+from jaxtyping import Array, Float, Int
 
 from ...scattering import ThinDielectricBxDF
-from .._textures import AbstractTexture
-from ._base import AbstractMaterial, Properties, unknown_parameters
-from ._dielectric import dielectric_textures
+from ._dielectric import _AbstractSmoothDielectric
 
 
-class ThinDielectric(AbstractMaterial):
+class ThinDielectric(_AbstractSmoothDielectric):
     """Thin dielectric slabs (Mitsuba's `thindielectric`): reflectance summed over the
     slab's internal reflections, $R' = R + T^2R/(1 - R^2)$, and straight-through transmission
     (`radiometria.scattering.ThinDielectricBxDF`).
@@ -31,19 +29,7 @@ class ThinDielectric(AbstractMaterial):
     """
 
     NAME: ClassVar[str] = "thindielectric"
-    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
-        {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
-    )
-    TRANSMISSIVE: ClassVar[bool] = True
-    eta: AbstractTexture
-    specular_reflectance: AbstractTexture
-    specular_transmittance: AbstractTexture
-    two_sided: Bool[Array, " m"]
-
-    @classmethod
-    def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
-        unknown_parameters(params, cls, where)
-        return cls(*dielectric_textures(params, where), jnp.asarray([True], bool))
+    ALWAYS_TWO_SIDED: ClassVar[bool] = True
 
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]):
         return ThinDielectricBxDF(
