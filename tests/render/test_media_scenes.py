@@ -156,12 +156,6 @@ def test_hostile_vol_files_are_scene_errors_naming_the_file(tmp_path, mutate, me
         load_mitsuba_xml(scene)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="Mitsuba 3 gives an emitting shape without a BSDF a diffuse BSDF of reflectance 0; "
-    "our loader gives every BSDF-less shape reflectance 0.5, so lit emitters reflect light "
-    "(2-9 % too bright next to a lit floor); the fix is in _scenes/_mitsuba_xml.py (issue 13)",
-)
 def test_emitter_shapes_without_a_bsdf_get_mitsubas_default(tmp_path):
     """The default BSDF of a BSDF-less emitting shape and of a plain one, against what
     Mitsuba 3 instantiates for the same file."""

@@ -747,6 +747,12 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
             if emitter is not None:
                 raise ctx.err(ch, "a shape takes one emitter")
             emitter = _emitter(ctx, ch)
+    if material is None and emitter is not None:  # Mitsuba: an emitter's default is black
+        names = [m.name for m in materials]
+        if "default-emitter" not in names:
+            materials.append(Material("diffuse", {"reflectance": 0.0}, name="default-emitter"))
+            names.append("default-emitter")
+        material = names.index("default-emitter")
     if material is None:  # Mitsuba's default: diffuse, reflectance 0.5
         if not default_material:
             materials.append(Material("diffuse", {"reflectance": 0.5}, name="default"))
