@@ -7,9 +7,34 @@ from typing import ClassVar
 import equinox as eqx
 from jaxtyping import Array, Bool, Float, Int
 
-__all__ = ["DEFAULT_UNBOUNDED_DEPTH", "AbstractIntegrator", "VariateFn"]
+__all__ = [
+    "DEFAULT_UNBOUNDED_DEPTH",
+    "AbstractIntegrator",
+    "VariateFn",
+    "check_path_fields",
+    "scene_max_depth",
+]
 
 DEFAULT_UNBOUNDED_DEPTH = 64  # max_depth for scenes that leave it unbounded (Mitsuba's -1)
+
+
+def scene_max_depth(params: dict) -> int:
+    """A scene file's `max_depth` (default 8); -1 or `None` (unbounded) is taken as
+    `DEFAULT_UNBOUNDED_DEPTH`. Not checked here: the integrator's `__check_init__` does."""
+    depth = params.get("max_depth", 8)
+    return DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
+
+
+def check_path_fields(integrator) -> None:
+    """The `__check_init__` of the path-type integrators: `max_depth` and `rr_depth` are ints
+    >= 1 (`ValueError`), `hide_emitters` is a bool (`TypeError`)."""
+    for name in ("max_depth", "rr_depth"):
+        value = getattr(integrator, name)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
+    if not isinstance(integrator.hide_emitters, bool):
+        raise TypeError(f"`hide_emitters` must be a bool, got {integrator.hide_emitters!r}.")
+
 
 VariateFn = Callable[[Array, int, Int[Array, " m"]], Float[Array, "m d"]]
 """`variates(first, n_dims, paths)`: uniform variates of dimensions `first .. first + n_dims -

@@ -62,7 +62,7 @@ from ..._math import dot
 from ...montecarlo import power_heuristic
 from ...scattering import coordinate_system
 from .._render_scene import RenderScene
-from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
+from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
 
 __all__ = ["DIMENSIONS_PER_BOUNCE", "Path", "path_radiance", "sample_dimensions"]
 
@@ -448,20 +448,14 @@ class Path(AbstractIntegrator):
     hide_emitters: bool = eqx.field(static=True, default=False)
 
     def __check_init__(self):
-        for name in ("max_depth", "rr_depth"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
-        if not isinstance(self.hide_emitters, bool):
-            raise TypeError(f"`hide_emitters` must be a bool, got {self.hide_emitters!r}.")
+        check_path_fields(self)
 
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "Path":
         """From a scene file's `max_depth` (default 8; -1 = unbounded, taken as
         `DEFAULT_UNBOUNDED_DEPTH`), `rr_depth` (default 5) and `hide_emitters` (default
         false)."""
-        depth = params.get("max_depth", 8)
-        depth = DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
+        depth = scene_max_depth(params)
         hide = params.get("hide_emitters", False)
         if not isinstance(hide, bool):
             raise ValueError(f"{where}: `hide_emitters` must be a boolean, got {hide!r}.")

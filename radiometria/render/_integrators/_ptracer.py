@@ -63,7 +63,7 @@ from jaxtyping import Array, Bool, Float
 
 from ..._math import dot
 from ...scattering import coordinate_system
-from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
+from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
 from ._path import _offset, _vertex
 
 __all__ = ["PTracer", "Splats", "ptracer_sample_dimensions"]
@@ -127,12 +127,7 @@ class PTracer(AbstractIntegrator):
     hide_emitters: bool = eqx.field(static=True, default=False)
 
     def __check_init__(self):
-        for name in ("max_depth", "rr_depth"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
-        if not isinstance(self.hide_emitters, bool):
-            raise TypeError(f"`hide_emitters` must be a bool, got {self.hide_emitters!r}.")
+        check_path_fields(self)
 
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "PTracer":
@@ -145,8 +140,7 @@ class PTracer(AbstractIntegrator):
                 f"{where}: unknown ptracer parameter(s) {sorted(unknown)}; valid: "
                 f"{sorted(cls.PARAMETERS)}."
             )
-        depth = params.get("max_depth", 8)
-        depth = DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
+        depth = scene_max_depth(params)
         try:
             return cls(
                 max_depth=depth,
