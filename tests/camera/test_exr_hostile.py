@@ -18,6 +18,8 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from radiometria.camera import read_exr, read_spectral_exr
 
+from ..helpers import garble_bytes
+
 RGB = np.random.default_rng(3).random((8, 8, 3)).astype(np.float32)
 
 
@@ -136,20 +138,8 @@ def test_garbled_exr_reads_or_raises_value_error(tmp_path_factory, spectral, edi
     else:
         channels = _rgb_channels()
     data = _exr(tmp, channels)
-    for kind, i, token, number in edits:
-        i %= len(data) + 1
-        if kind == "flip" and i < len(data):
-            data = data[:i] + bytes([data[i] ^ token[0] or 1]) + data[i + 1 :]
-        elif kind == "delete":
-            data = data[:i] + data[i + len(token) :]
-        elif kind == "insert":
-            data = data[:i] + token + data[i:]
-        elif kind == "truncate":
-            data = data[:i]
-        elif kind == "int32":  # overwrite 4 bytes with an extreme integer (sizes, windows)
-            data = data[:i] + struct.pack("<i", number) + data[i + 4 :]
     path = tmp / "t.exr"
-    path.write_bytes(data)
+    path.write_bytes(garble_bytes(data, edits))
     start = time.monotonic()
     try:
         (read_spectral_exr if spectral else read_exr)(path)

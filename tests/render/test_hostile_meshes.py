@@ -18,6 +18,8 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from radiometria.render import SceneError, load_mesh, load_scene
 
+from ..helpers import mutate_bytes
+
 TET = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
 TET_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
 TET_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
@@ -140,29 +142,6 @@ BYTE_MUTATION = st.tuples(
 )
 
 
-def _mutate(data: bytes, mutations) -> bytes:
-    for kind, i, n, token in mutations:
-        i = i % (len(data) + 1)
-        if kind == "delete":
-            data = data[:i] + data[i + n :]
-        elif kind == "duplicate":
-            data = data[:i] + data[i : i + n] + data[i:]
-        elif kind == "insert":
-            data = data[:i] + token + data[i:]
-        elif kind == "flip" and data:
-            j = i % len(data)
-            data = data[:j] + bytes([data[j] ^ (1 + n % 255)]) + data[j + 1 :]
-        elif kind == "truncate":
-            data = data[:i]
-        elif kind == "swap_tokens":  # replace one whitespace-separated token
-            parts = re.split(rb"(\s+)", data)
-            words = [k for k, p in enumerate(parts) if p and not p.isspace()]
-            if words:
-                parts[words[i % len(words)]] = token
-                data = b"".join(parts)
-    return data
-
-
 SOURCES = {
     "tet.obj": TET.encode(),
     "tet_ascii.ply": _tet_ply("ascii"),
@@ -178,7 +157,7 @@ SOURCES = {
 )
 def test_mutated_mesh_loads_or_raises_scene_error(tmp_path_factory, source, mutations):
     path = tmp_path_factory.mktemp("fuzz") / source
-    path.write_bytes(_mutate(SOURCES[source], mutations))
+    path.write_bytes(mutate_bytes(SOURCES[source], mutations))
     start = time.monotonic()
     try:
         mesh = load_mesh(path)

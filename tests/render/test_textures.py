@@ -35,6 +35,8 @@ from radiometria.render._textures import (
 )
 from radiometria.upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum, get_lut
 
+from ..helpers import mutate_bytes
+
 GREYS = np.array([[0.1, 0.3], [0.5, 0.9]])  # row 0 is the top of the image
 
 
@@ -344,21 +346,6 @@ BYTE_MUTATION = st.tuples(
 )
 
 
-def _mutate(data: bytes, mutations) -> bytes:
-    for kind, i, n, token in mutations:
-        i = i % (len(data) + 1)
-        if kind == "delete":
-            data = data[:i] + data[i + n :]
-        elif kind == "insert":
-            data = data[:i] + token + data[i:]
-        elif kind == "flip" and data:
-            j = i % len(data)
-            data = data[:j] + bytes([data[j] ^ (1 + n % 255)]) + data[j + 1 :]
-        elif kind == "truncate":
-            data = data[:i]
-    return data
-
-
 def _sources() -> dict:
     import io
 
@@ -386,7 +373,7 @@ SOURCES = _sources()
 )
 def test_mutated_image_reads_or_raises_texture_file_error(tmp_path, source, mutations):
     path = tmp_path / source
-    path.write_bytes(_mutate(SOURCES[source], mutations))
+    path.write_bytes(mutate_bytes(SOURCES[source], mutations))
     start = time.monotonic()
     try:
         rgb = read_texture_image(path)

@@ -19,6 +19,8 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 import radiometria.upsampling as up
 
+from ..helpers import garble_bytes
+
 RES = 3
 SCALE = np.linspace(0.0, 1.0, RES).astype(np.float32)
 COEFFS = np.random.default_rng(7).normal(size=(3, RES, RES, RES, 3)).astype(np.float32)
@@ -249,16 +251,6 @@ def test_garbled_table_bytes_load_or_raise_lut_file_error(tmp_path_factory, sour
     tmp = tmp_path_factory.mktemp("fuzz")
     lut = up.RGBToSpectrumLUT(SCALE, COEFFS, "sRGB")
     data = up.save_lut(lut, tmp / f"good.{source}").read_bytes()
-    for kind, i, token in edits:
-        i %= len(data) + 1
-        if kind == "flip" and i < len(data):
-            data = data[:i] + bytes([data[i] ^ token[0] or 1]) + data[i + 1 :]
-        elif kind == "delete":
-            data = data[:i] + data[i + len(token) :]
-        elif kind == "insert":
-            data = data[:i] + token + data[i:]
-        elif kind == "truncate":
-            data = data[:i]
     path = tmp / f"t.{source}"
-    path.write_bytes(data)
+    path.write_bytes(garble_bytes(data, edits))
     _load_or_own_error(path)
