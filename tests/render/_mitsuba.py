@@ -69,6 +69,42 @@ def z_test_against_mitsuba(
     return pixel_z_test(ours.astype(np.float64), mean, var, spp, ref_spp)
 
 
+def film_xml(size: int, spp: int = 16, rfilter: str = "gaussian") -> str:
+    """The `<sampler>` (independent, `spp` samples) and `<film>` (`size` x `size` hdrfilm,
+    `rfilter`) of a test scene's sensor, on three lines (the sampler on the first)."""
+    return (
+        f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>\n'
+        f'    <film type="hdrfilm"><integer name="width" value="{size}"/>\n'
+        f'      <integer name="height" value="{size}"/><rfilter type="{rfilter}"/></film>'
+    )
+
+
+def perspective_xml(origin: str, fov: float, size: int, spp: int = 16, rfilter="gaussian") -> str:
+    """A `perspective` sensor of horizontal field of view `fov` [deg] at `origin` looking at
+    the world origin with +y up, with `film_xml(size, spp, rfilter)`."""
+    return f"""<sensor type="perspective">
+    <float name="fov" value="{fov}"/>
+    <transform name="to_world"><lookat origin="{origin}" target="0, 0, 0" up="0, 1, 0"/>
+    </transform>
+    {film_xml(size, spp, rfilter)}
+  </sensor>"""
+
+
+def floor_and_light_xml(floor_scale: float, radiance: float) -> str:
+    """A grey (0.5) diffuse floor at y = -1, `2 floor_scale` wide, lit by a `1.5`-half-width
+    rectangle light of `radiance` (RGB grey) facing down from (1, 3, 1.5)."""
+    return f"""<shape type="rectangle">
+    <transform name="to_world"><scale value="{floor_scale}"/><rotate x="1" angle="-90"/>
+      <translate y="-1"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="1.5"/><rotate x="1" angle="90"/>
+      <translate x="1" y="3" z="1.5"/></transform>
+    <emitter type="area"><rgb name="radiance" value="{radiance}, {radiance}, {radiance}"/></emitter>
+  </shape>"""
+
+
 def _matrix(m) -> str:
     a = np.asarray(m.matrix if hasattr(m, "matrix") else m, np.float64).reshape(4, 4)
     return " ".join(f"{x:.9g}" for x in a.ravel())

@@ -17,6 +17,8 @@ from radiometria.camera import write_exr
 from radiometria.render import SceneError
 from radiometria.render._lights import EnvironmentLight
 
+from ._mitsuba import perspective_xml
+
 pytestmark = pytest.mark.slow
 
 
@@ -114,14 +116,7 @@ def test_envmap_sampling_chi2():
 def _scene(envmap: str, body: str, *, size=16, integrator="direct", fov=50.0, spp=16) -> str:
     return f"""<scene version="3.0.0">
   <integrator type="{integrator}"/>
-  <sensor type="perspective">
-    <float name="fov" value="{fov}"/>
-    <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/>
-    </transform>
-    <sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>
-    <film type="hdrfilm"><integer name="width" value="{size}"/>
-      <integer name="height" value="{size}"/><rfilter type="box"/></film>
-  </sensor>
+  {perspective_xml("0, 0, 3", fov, size, spp, rfilter="box")}
   {envmap}
   {body}
 </scene>

@@ -23,6 +23,8 @@ from radiometria.render._lights import (
     spot_falloff,
 )
 
+from ._mitsuba import perspective_xml
+
 pytestmark = pytest.mark.slow
 
 SIZE = 16
@@ -40,14 +42,7 @@ def _scene(light: str, *, integrator: str = "direct", plane: bool = True, extra:
     )
     return f"""<scene version="3.0.0">
   <integrator type="{integrator}"/>
-  <sensor type="perspective">
-    <float name="fov" value="{FOV}"/>
-    <transform name="to_world"><lookat origin="0, 0, {HEIGHT}" target="0, 0, 0" up="0, 1, 0"/>
-    </transform>
-    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-    <film type="hdrfilm"><integer name="width" value="{SIZE}"/>
-      <integer name="height" value="{SIZE}"/><rfilter type="box"/></film>
-  </sensor>
+  {perspective_xml(f"0, 0, {HEIGHT}", FOV, SIZE, rfilter="box")}
   {shape}
   {light}
   {extra}

@@ -8,7 +8,7 @@ from radiometria.render._scenes._compile import scene_camera, scene_sampler
 from radiometria.render._scenes._description import SceneError
 from radiometria.render._scenes._mitsuba_xml import load_mitsuba_xml
 
-from ._mitsuba import mitsuba_moments, z_test_against_mitsuba
+from ._mitsuba import film_xml, floor_and_light_xml, mitsuba_moments, z_test_against_mitsuba
 
 SIZE = 16
 
@@ -36,20 +36,9 @@ def _xml(sensor: str, size: int = SIZE) -> str:
     return f"""<scene version="3.0.0">
   <integrator type="path"><integer name="max_depth" value="3"/></integrator>
   {sensor}
-    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-    <film type="hdrfilm"><integer name="width" value="{size}"/>
-      <integer name="height" value="{size}"/><rfilter type="gaussian"/></film>
+    {film_xml(size)}
   </sensor>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="5"/><rotate x="1" angle="-90"/>
-      <translate y="-1"/></transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
-  </shape>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="1.5"/><rotate x="1" angle="90"/>
-      <translate x="1" y="3" z="1.5"/></transform>
-    <emitter type="area"><rgb name="radiance" value="5, 5, 5"/></emitter>
-  </shape>
+  {floor_and_light_xml(5, 5)}
   {boxes}
 </scene>
 """

@@ -12,7 +12,7 @@ from radiometria.render._scenes._description import SceneError
 from radiometria.render._scenes._mitsuba_xml import load_mitsuba_xml
 from radiometria.render._scenes._shapes import SPHERE_MAX_RADIAL_ERROR, sphere
 
-from ._mitsuba import mitsuba, z_test_against_mitsuba
+from ._mitsuba import floor_and_light_xml, mitsuba, perspective_xml, z_test_against_mitsuba
 
 SIZE = 16
 
@@ -21,24 +21,8 @@ def _xml(body: str, *, depth: int = 6, origin="0, 0.6, 4.2", size: int = SIZE) -
     """A small scene: the shapes of `body` on a grey floor, lit by a rectangle light."""
     return f"""<scene version="3.0.0">
   <integrator type="path"><integer name="max_depth" value="{depth}"/></integrator>
-  <sensor type="perspective">
-    <float name="fov" value="45"/>
-    <transform name="to_world"><lookat origin="{origin}" target="0, 0, 0" up="0, 1, 0"/>
-    </transform>
-    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-    <film type="hdrfilm"><integer name="width" value="{size}"/>
-      <integer name="height" value="{size}"/><rfilter type="gaussian"/></film>
-  </sensor>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/>
-      <translate y="-1"/></transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
-  </shape>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="1.5"/><rotate x="1" angle="90"/>
-      <translate x="1" y="3" z="1.5"/></transform>
-    <emitter type="area"><rgb name="radiance" value="4, 4, 4"/></emitter>
-  </shape>
+  {perspective_xml(origin, 45, size)}
+  {floor_and_light_xml(4, 4)}
 {body}
 </scene>
 """
