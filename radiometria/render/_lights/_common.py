@@ -11,6 +11,7 @@ from ._base import AbstractLight
 
 __all__ = [
     "AbstractDeltaLight",
+    "AbstractSurfacelessLight",
     "direction_to_points",
     "illuminant_table",
     "pick_row",
@@ -85,15 +86,20 @@ def direction_to_points(position, p):
     return to_light / jnp.where(ok, dist, 1.0)[:, None], dist, dist2, ok
 
 
-class AbstractDeltaLight(AbstractLight):
-    """Lights that no ray can hit (point, spot, directional): no emission at surface hits or
-    along escaped rays, and zero solid-angle densities for MIS."""
+class AbstractSurfacelessLight(AbstractLight):
+    """Lights with no surface in the scene (all but the area lights): no emission at surface
+    hits, and a zero density for `sample_li` picking a surface point."""
 
     def pdf_li(self, face, dist, cos_light):
         return jnp.zeros(face.shape, dist.dtype)
 
     def emitted(self, face, cos_o, valid, wavelength_nm):
         return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
+
+
+class AbstractDeltaLight(AbstractSurfacelessLight):
+    """Lights that no ray can hit (point, spot, directional): no emission at surface hits or
+    along escaped rays, and zero solid-angle densities for MIS."""
 
     def emitted_escaped(self, directions, escaped, wavelength_nm):
         return jnp.zeros(wavelength_nm.shape, directions.dtype)

@@ -8,11 +8,11 @@ import numpy as np
 
 from ...montecarlo import sample_uniform_sphere
 from .._spectral import SpectrumTable
-from ._base import AbstractLight, LightSample
-from ._common import illuminant_table, spectral_param
+from ._base import LightSample
+from ._common import AbstractSurfacelessLight, illuminant_table, spectral_param
 
 
-class ConstantLight(AbstractLight):
+class ConstantLight(AbstractSurfacelessLight):
     r"""A light at infinity of the same radiance $L$ in every direction.
 
     Rays that leave the scene see $L$. Next-event estimation samples a direction uniformly on
@@ -61,12 +61,6 @@ class ConstantLight(AbstractLight):
             pdf=jnp.full((n,), 1.0 / (4.0 * np.pi), p.dtype),
             delta=jnp.zeros((n,), bool),
         )
-
-    def pdf_li(self, face, dist, cos_light):
-        return jnp.zeros(face.shape, dist.dtype)
-
-    def emitted(self, face, cos_o, valid, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
 
     def emitted_escaped(self, directions, escaped, wavelength_nm):
         le = self._le(directions.shape[0], wavelength_nm)

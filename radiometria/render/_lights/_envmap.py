@@ -33,8 +33,8 @@ from ...upsampling import (
     sigmoid_polynomial_jakob2019,
 )
 from .._spectral import SpectrumTable, wavelength_grid_nm
-from ._base import AbstractLight, LightSample
-from ._common import to_world_param
+from ._base import LightSample
+from ._common import AbstractSurfacelessLight, to_world_param
 
 __all__ = ["EnvironmentLight", "read_envmap"]
 
@@ -88,7 +88,7 @@ def read_envmap(path, where: str = "") -> np.ndarray:
     return rgb
 
 
-class EnvironmentLight(AbstractLight):
+class EnvironmentLight(AbstractSurfacelessLight):
     r"""An environment map: radiance at infinity from an equirectangular RGB image (module
     docstring: Mitsuba 3's orientation and interpolation).
 
@@ -260,12 +260,6 @@ class EnvironmentLight(AbstractLight):
             pdf=self._pdf_uv_to_solid_angle(pdf_uv, sin_theta).astype(p.dtype),
             delta=jnp.zeros((n,), bool),
         )
-
-    def pdf_li(self, face, dist, cos_light):
-        return jnp.zeros(face.shape, dist.dtype)
-
-    def emitted(self, face, cos_o, valid, wavelength_nm):
-        return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
 
     def emitted_escaped(self, directions, escaped, wavelength_nm):
         uv, _ = self._uv(directions)
