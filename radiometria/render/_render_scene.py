@@ -172,22 +172,10 @@ class RenderScene(eqx.Module):
         if not isinstance(accelerator, AbstractAccelerator):
             accelerator = build_accelerator(vertices, faces, kind=accelerator, dtype=dtype)
         media_fields = _media_fields(media, face_interior, face_exterior, camera_medium, n_faces)
-        if face_uv is not None:
-            face_uv = np.asarray(face_uv, np.float64)
-            if face_uv.shape != (n_faces, 3, 2) or not np.all(np.isfinite(face_uv)):
-                raise ValueError(
-                    f"`face_uv` must be finite, of shape ({n_faces}, 3, 2), got shape "
-                    f"{face_uv.shape}."
-                )
-            face_uv = jnp.asarray(face_uv, dtype)
-        if shading_normal is not None:
-            shading_normal = np.asarray(shading_normal, np.float64)
-            if shading_normal.shape != (n_faces, 3, 3) or not np.all(np.isfinite(shading_normal)):
-                raise ValueError(
-                    f"`shading_normal` must be finite, of shape ({n_faces}, 3, 3), got shape "
-                    f"{shading_normal.shape}."
-                )
-            shading_normal = jnp.asarray(shading_normal, dtype)
+        face_uv = _optional_face_array(face_uv, "face_uv", (n_faces, 3, 2), dtype)
+        shading_normal = _optional_face_array(
+            shading_normal, "shading_normal", (n_faces, 3, 3), dtype
+        )
         return cls(
             p0=p0,
             e1=e1,
@@ -201,6 +189,19 @@ class RenderScene(eqx.Module):
             shading_normal=shading_normal,
             **media_fields,
         )
+
+
+def _optional_face_array(value, name: str, shape: tuple[int, ...], dtype):
+    """`None`, or a per-face array checked to be finite and of `shape`, as `dtype`."""
+    if value is None:
+        return None
+    value = np.asarray(value, np.float64)
+    if value.shape != shape or not np.all(np.isfinite(value)):
+        raise ValueError(
+            f"`{name}` must be finite, of shape ({', '.join(map(str, shape))}), got shape "
+            f"{value.shape}."
+        )
+    return jnp.asarray(value, dtype)
 
 
 def _media_fields(media, face_interior, face_exterior, camera_medium, n_faces) -> dict:
