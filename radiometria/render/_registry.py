@@ -50,6 +50,7 @@ __all__ = [
     "MATERIALS",
     "MEDIA",
     "SAMPLERS",
+    "SAMPLER_ALIASES",
     "TEXTURES",
 ]
 
@@ -76,8 +77,8 @@ SAMPLERS = _by_name(Independent, OwenSobol)
 # Mitsuba's stratified and low-discrepancy samplers: Owen-scrambled Sobol points are stratified
 # in every elementary interval of each dimension pair (power-of-two counts), the property
 # `stratified` and `multijitter` have for square counts, and `ldsampler`'s (0, 2)-sequences.
-SAMPLERS.update(stratified=OwenSobol, multijitter=OwenSobol, ldsampler=OwenSobol)
-# Spectral values of scene files are constant textures until textures arrive (scene format).
+SAMPLER_ALIASES = {"stratified": "sobol", "multijitter": "sobol", "ldsampler": "sobol"}
+SAMPLERS.update({alias: SAMPLERS[name] for alias, name in SAMPLER_ALIASES.items()})
 TEXTURES = {
     "constant": ConstantTexture,
     "bitmap": BitmapTexture,
