@@ -127,7 +127,7 @@ class PlasticBxDF(AbstractBxDF):
         Mitsuba). [dimensionless]
     - `specular_sampling_weight`: $w_s$ in [0, 1], `(...)`; default Mitsuba's
         $\bar S/(\bar R + \bar S)$ with means over the wavelengths given. [dimensionless]
-    - `nonlinear`: static; internal scattering multiplies the base colour.
+    - `nonlinear`: bool, `(...)`: internal scattering multiplies the base colour.
 
     !!! note "Thesis"
         Eq. 3.4 (BxDF), 3.13-3.18 (Fresnel), section 3.1 (diffuse and specular reflection).
@@ -140,7 +140,7 @@ class PlasticBxDF(AbstractBxDF):
     specular_reflectance: Array
     eta: Array
     specular_sampling_weight: Array
-    nonlinear: bool = eqx.field(static=True)
+    nonlinear: Array
 
     def __init__(
         self,
@@ -158,7 +158,7 @@ class PlasticBxDF(AbstractBxDF):
         eta = as_float_array(eta, "eta")
         self.eta = check_in_range(eta, "eta", 0.0, jnp.inf, closed_lower=False)
         self.specular_sampling_weight = _weight(s, d, specular_sampling_weight)
-        self.nonlinear = bool(nonlinear)
+        self.nonlinear = jnp.asarray(nonlinear, bool)
 
     def _all(self, *items):
         return _broadcast(
@@ -172,7 +172,8 @@ class PlasticBxDF(AbstractBxDF):
     def _diffuse(self, d, eta, t_i, t_o) -> Array:
         """f_d: the base seen through the coating (module notes)."""
         fdr = fresnel_diffuse_reflectance(1.0 / eta)[..., None]
-        d = d / (1.0 - (d * fdr if self.nonlinear else fdr))
+        nonlinear = jnp.broadcast_to(self.nonlinear, eta.shape)[..., None]
+        d = d / (1.0 - jnp.where(nonlinear, d * fdr, fdr))
         return d * (t_i * t_o / (eta * eta * jnp.pi))[..., None]
 
     def _p_specular(self, f_i, w) -> Array:
@@ -291,7 +292,7 @@ def _tables(alpha: Array, eta: Array, distribution: str, n_t: int, n_r: int):
         else:  # refraction through m (thesis eq. 3.12)
             out = -w * inv_etap[..., None] + (c * inv_etap - cos_t)[..., None] * m
             value = jnp.where(out[..., 2] * w[..., 2] < 0, (1.0 - f) * dist.G1(out), 0.0)
-        return jnp.sum(value * weight, axis=-1)
+        return jnp.sum(value * weight[None], axis=-1)
 
     transmittance = average(eta, n_t, reflect=False)
     internal = 2.0 * jnp.mean(average(1.0 / eta, n_r, reflect=True) * wi[:, 2])
@@ -305,7 +306,7 @@ def _lerp_table(table: Array, x: Array) -> Array:
     i = jnp.clip(jnp.floor(x), 0, n - 2).astype(jnp.int32)
     v0 = jnp.take_along_axis(table, i[..., None], axis=-1)[..., 0]
     v1 = jnp.take_along_axis(table, i[..., None] + 1, axis=-1)[..., 0]
-    t = x - i
+    t = x - i.astype(x.dtype)
     return v0 * (1.0 - t) + v1 * t
 
 
@@ -346,8 +347,8 @@ class RoughPlasticBxDF(AbstractBxDF):
     external_transmittance: Array
     internal_reflectance: Array
     specular_sampling_weight: Array
+    nonlinear: Array
     distribution: str = eqx.field(static=True)
-    nonlinear: bool = eqx.field(static=True)
 
     def __init__(
         self,
@@ -375,7 +376,7 @@ class RoughPlasticBxDF(AbstractBxDF):
         self.external_transmittance = as_float_array(tables[0], "external_transmittance")
         self.internal_reflectance = as_float_array(tables[1], "internal_reflectance")
         self.specular_sampling_weight = _weight(s, d, specular_sampling_weight)
-        self.nonlinear = bool(nonlinear)
+        self.nonlinear = jnp.asarray(nonlinear, bool)
 
     def _all(self, *items):
         return _broadcast(
@@ -403,7 +404,8 @@ class RoughPlasticBxDF(AbstractBxDF):
         spec = _fresnel(jnp.sum(o * h, axis=-1), eta) * dg * dist.G1(i) / den
         t_o, t_i = _lerp_table(table, c_o), _lerp_table(table, jnp.clip(c_i, 0.0, 1.0))
         fdr = fdr[..., None]
-        base = d / (1.0 - (d * fdr if self.nonlinear else fdr))
+        nonlinear = jnp.broadcast_to(self.nonlinear, eta.shape)[..., None]
+        base = d / (1.0 - jnp.where(nonlinear, d * fdr, fdr))
         value = s * spec[..., None] + base * (t_o * t_i / (eta * eta * jnp.pi))[..., None]
         p_s = _lobe_probability((1.0 - t_o) * w, t_o * (1.0 - w))
         pdf = p_s * dg / jnp.where(ok, 4.0 * c_o, 1.0) + (1.0 - p_s) * c_i / jnp.pi
