@@ -83,8 +83,10 @@ def test_mitsuba_xml_loads_the_subset(scene_file):
     assert isinstance(light.radiance, BlackbodySpectrum)
     assert float(light.radiance.temperature) == 4000.0 and float(light.radiance.scale) == 1.0
     np.testing.assert_allclose(light.total_area, 0.36)
-    assert s.face_material[s.face_shape == 3][0] == 3  # the light got Mitsuba's default BSDF
-    assert s.materials[3].params == {"reflectance": 0.5}
+    # An emitter without a BSDF gets Mitsuba 3's default for emitters: black diffuse
+    # (as mi.load_dict of an emitting rectangle shows: SmoothDiffuse, reflectance 0).
+    assert s.face_material[s.face_shape == 3][0] == 3
+    assert s.materials[3].params == {"reflectance": 0.0}
     assert (s.camera.fov_deg, s.camera.fov_axis) == (40.0, "y")
     assert (s.film.width, s.film.height, s.film.filter) == (64, 48, "tent")
     assert s.max_depth == 6 and s.spp == 16
