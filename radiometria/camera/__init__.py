@@ -8,7 +8,7 @@ r"""Camera (thesis section 2.3): pinhole projection, reconstruction filters and 
   importance sampling (section 2.3.2, eq. 2.31-2.35);
 - `_film`: spectral samples to XYZ, per-pixel accumulation (eq. 2.35) and splatting (eq. 2.34),
   development to linear RGB;
-- `_io`: OpenEXR (RGB and spectral) and sRGB PNG files, written atomically.
+- `_io`: OpenEXR (RGB and spectral) and sRGB PNG files, written atomically; Radiance RGBE read.
 
 Conventions (Mitsuba 3's, which the reference scenes use):
 
@@ -51,6 +51,7 @@ from ._filters import (
 )
 from ._io import (
     read_exr as read_exr,
+    read_hdr as read_hdr,
     read_spectral_exr as read_spectral_exr,
     spectral_channel_name as spectral_channel_name,
     write_exr as write_exr,

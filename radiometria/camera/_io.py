@@ -1,4 +1,5 @@
-r"""Image files: OpenEXR (RGB and spectral) and 8-bit sRGB PNG, written atomically.
+r"""Image files: OpenEXR (RGB and spectral) and 8-bit sRGB PNG, written atomically; Radiance
+RGBE (`.hdr`) pictures read.
 
 Every writer goes through a temporary file in the target's directory and `os.replace`, so a
 reader never sees a half-written image and a failed write leaves nothing behind. Writing to a
@@ -456,3 +457,162 @@ def write_png(path, rgb_linear, exposure: float = 0.0) -> Path:
             f.write(png)
 
     return _atomic_write(path, write)
+
+
+# ---------------------------------------------------------------------------------------------
+# Radiance RGBE (.hdr / .pic)
+
+HDR_MAX_HEADER_BYTES = 1 << 16
+HDR_MAX_SIDE = 1 << 15  # the new run-length encoding stores a scanline's width in 15 bits
+
+
+class _HdrError(ValueError):
+    pass
+
+
+def _hdr_header(data: bytes) -> tuple[int, int, int, bool, bool, dict]:
+    """Parse a Radiance picture's header and resolution line (Ward 1991's file format).
+
+    Returns `(pixel data offset, height, width, flip rows, flip columns, metadata)`. Only the
+    scanline-major orientations (`-Y H +X W`, `+Y H ...`, `... -X W`) are read; the four
+    column-major ones (`+X W -Y H`, ...) are refused.
+    """
+    head = data[:HDR_MAX_HEADER_BYTES]
+    if not (head.startswith(b"#?") or head.startswith(b"FORMAT=")):
+        raise _HdrError(f"not a Radiance picture (it starts with {head[:10]!r}, not '#?').")
+    end = head.find(b"\n\n")
+    if end < 0:
+        raise _HdrError(f"no end of the header (an empty line) in its first {len(head):,} bytes.")
+    metadata: dict[str, str] = {}
+    for raw in head[:end].split(b"\n")[1 if head.startswith(b"#?") else 0 :]:
+        line = raw.decode("latin-1").strip()
+        if not line or line.startswith("#") or "=" not in line:
+            continue
+        key, _, value = line.partition("=")
+        key = key.strip()
+        metadata[key] = f"{metadata[key]} {value.strip()}" if key in metadata else value.strip()
+    fmt = metadata.get("FORMAT", "32-bit_rle_rgbe")
+    if fmt != "32-bit_rle_rgbe":
+        raise _HdrError(f"FORMAT={fmt} is not supported; only 32-bit_rle_rgbe (RGB).")
+    nl = data.find(b"\n", end + 2, end + 2 + 64)
+    if nl < 0:
+        raise _HdrError("truncated or missing resolution line after the header.")
+    words = data[end + 2 : nl].decode("latin-1").split()
+    if len(words) != 4 or words[0][1:] not in "YX" or words[2][1:] not in "YX":
+        raise _HdrError(f"malformed resolution line {data[end + 2 : nl][:64]!r}.")
+    if words[0][1:] != "Y" or words[2][1:] != "X":
+        raise _HdrError(
+            f"resolution line {' '.join(words)!r}: column-major pictures are not supported "
+            "(only '-Y H +X W' and its flips)."
+        )
+    if words[0][0] not in "+-" or words[2][0] not in "+-":
+        raise _HdrError(f"malformed resolution line {' '.join(words)!r}.")
+    try:
+        height, width = int(words[1]), int(words[3])
+    except ValueError:
+        raise _HdrError(f"malformed resolution line {' '.join(words)!r}.") from None
+    if not (1 <= height <= HDR_MAX_SIDE and 1 <= width <= HDR_MAX_SIDE):
+        raise _HdrError(
+            f"resolution {width} x {height}: each side must be between 1 and {HDR_MAX_SIDE}."
+        )
+    return nl + 1, height, width, words[0][0] == "+", words[2][0] == "-", metadata
+
+
+def _hdr_scanlines(body: bytes, height: int, width: int) -> np.ndarray:
+    """Decode `height` scanlines of RGBE bytes, flat or in the new run-length encoding.
+
+    A scanline starting with bytes 2, 2 and its width (8 <= width < 32768) holds four
+    run-length-coded channel streams (a byte n > 128 repeats the next byte n - 128 times,
+    n <= 128 copies n literal bytes); anything else is a flat scanline of 4-byte pixels.
+    The loop runs over runs, not pixels: runs are sliced whole into the output.
+    """
+    out = np.empty((height, 4, width), np.uint8)
+    src = np.frombuffer(body, np.uint8)
+    size, pos = len(body), 0
+    for row in range(height):
+        if (
+            8 <= width < 32768
+            and pos + 4 <= size
+            and src[pos] == 2
+            and src[pos + 1] == 2
+            and (int(src[pos + 2]) << 8 | int(src[pos + 3])) == width
+        ):
+            pos += 4
+            for channel in range(4):
+                dst, x = out[row, channel], 0
+                while x < width:
+                    if pos >= size:
+                        raise _HdrError(f"truncated in scanline {row} (run-length data).")
+                    n = int(src[pos])
+                    run = n > 128
+                    n -= 128 * run
+                    if n == 0 or x + n > width:
+                        raise _HdrError(
+                            f"a {'run' if run else 'literal'} of {n} bytes at pixel {x} of "
+                            f"scanline {row} (width {width})."
+                        )
+                    if pos + (2 if run else 1 + n) > size:
+                        raise _HdrError(f"truncated in scanline {row} (run-length data).")
+                    dst[x : x + n] = src[pos + 1] if run else src[pos + 1 : pos + 1 + n]
+                    pos += 2 if run else 1 + n
+                    x += n
+        else:
+            if pos + 4 * width > size:
+                raise _HdrError(f"truncated in scanline {row} (flat pixels).")
+            out[row] = src[pos : pos + 4 * width].reshape(width, 4).T
+            pos += 4 * width
+    return out
+
+
+def read_hdr(path) -> tuple[np.ndarray, dict]:
+    """Read a Radiance RGBE picture (`.hdr`, `.pic`): flat or run-length-encoded scanlines.
+
+    Each pixel stores three 8-bit mantissas and a shared exponent: a channel is
+    `mantissa * 2**(exponent - 136)`, and exponent 0 is black (Ward's `rgbe2float`, as
+    Mitsuba 3 reads the format; `EXPOSURE` and other header lines are returned as metadata,
+    not applied, as there). Row 0 of the result is the top of the picture for every
+    scanline-major orientation (`-Y H +X W` and its flips).
+
+    **Arguments:**
+
+    - `path`: the file. [path]
+
+    **Returns:**
+
+    `(rgb, metadata)`: the image `(H, W, 3)` as float32, and the header's `KEY=value` lines
+    as a dict of strings.
+
+    **Raises:**
+
+    `FileNotFoundError` for a missing file; `ValueError` naming the file for a file that is
+    not a Radiance picture, an XYZE picture, a column-major orientation, a resolution over
+    32768 per side or one the file is too short to hold (checked before decoding), and
+    truncated or corrupt run-length data (naming the scanline).
+
+    ??? cite "References"
+        `Ward1991` (the RGBE pixel format and the Radiance picture file).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(2, f"No such image file: {str(path)!r}", str(path))
+    try:
+        data = path.read_bytes()
+        start, height, width, flip_y, flip_x, metadata = _hdr_header(data)
+        # The smallest encoding of a scanline: four runs of 127 per 2 bytes plus its marker.
+        least = height * (4 + 8 * -(-width // 127)) if width >= 8 else height * 4 * width
+        if len(data) - start < least:
+            raise _HdrError(
+                f"resolution {width} x {height} needs at least {least:,} bytes of pixels; "
+                f"the file has {len(data) - start:,} (truncated file, or an absurd size)."
+            )
+        rgbe = _hdr_scanlines(data[start:], height, width)
+    except _HdrError as e:
+        raise ValueError(f"{str(path)!r} is not a readable Radiance picture: {e}") from None
+    exponent = rgbe[:, 3, :].astype(np.int32)
+    scale = np.where(exponent > 0, np.ldexp(np.float32(1), exponent - 136), 0).astype(np.float32)
+    rgb = np.moveaxis(rgbe[:, :3, :], 1, 2).astype(np.float32) * scale[..., None]
+    if flip_y:
+        rgb = rgb[::-1]
+    if flip_x:
+        rgb = rgb[:, ::-1]
+    return np.ascontiguousarray(rgb), metadata

@@ -269,7 +269,7 @@ def _valid_png() -> bytes:
         ("big.png", _png_header(9000, 9000), "declares 9000 x 9000 texels"),
         ("bomb.png", _png_header(100_000, 100_000), "image too large"),
         ("empty.png", b"", "not a readable image"),
-        ("pic.hdr", b"#?RADIANCE\n", "Radiance .hdr textures are not supported"),
+        ("pic.hdr", b"#?RADIANCE\n", "not a readable Radiance RGBE texture"),
         ("pic.gif2", b"GIF89a", "unsupported texture format"),
         ("bad.exr", b"v/1\x01" + b"\x00" * 40, "not a readable RGB OpenEXR texture"),
     ],

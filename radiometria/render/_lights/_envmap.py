@@ -24,7 +24,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..._math import dot
-from ...camera import read_exr
+from ...camera import read_exr, read_hdr
 from ...montecarlo import PiecewiseConstant2D
 from ...upsampling import (
     RGBIlluminantSpectrum,
@@ -46,7 +46,8 @@ def read_envmap(path, where: str = "") -> np.ndarray:
 
     **Arguments:**
 
-    - `path`: an OpenEXR file (float or half R, G, B channels). [path]
+    - `path`: an OpenEXR file (float or half R, G, B channels) or a Radiance RGBE picture
+        (`.hdr`, `.rgbe`, `.pic`; `camera.read_hdr`). [path]
     - `where`: the file and line of the scene that names it, for error messages.
 
     **Returns:**
@@ -56,20 +57,15 @@ def read_envmap(path, where: str = "") -> np.ndarray:
     **Raises:**
 
     `FileNotFoundError` for a missing file; `ValueError` naming `where` and the file for a
-    Radiance `.hdr` file (no reader yet: convert it to OpenEXR), a file that is not OpenEXR,
-    an image that is not 2:1 or smaller than 4 x 2 pixels, or a negative or non-finite value.
+    file that is not a readable OpenEXR or RGBE picture, an image that is not 2:1 or smaller
+    than 4 x 2 pixels, or a negative or non-finite value.
     """
     path = Path(path)
     prefix = f"{where}: " if where else ""
-    if path.suffix.lower() in (".hdr", ".rgbe", ".pic"):
-        raise ValueError(
-            f"{prefix}environment map {str(path)!r}: Radiance .hdr files are not supported; "
-            "convert it to OpenEXR (.exr)."
-        )
     if not path.is_file():
         raise FileNotFoundError(f"{prefix}environment map not found: {path}")
     try:
-        rgb, _ = read_exr(path)
+        rgb, _ = (read_hdr if path.suffix.lower() in (".hdr", ".rgbe", ".pic") else read_exr)(path)
     except (OSError, ValueError) as e:
         raise ValueError(f"{prefix}environment map {str(path)!r}: {e}") from None
     rgb = np.asarray(rgb, np.float64)

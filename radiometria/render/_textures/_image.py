@@ -1,8 +1,9 @@
-"""Reading texture images: PNG, JPEG, BMP (Pillow) and OpenEXR, checked before decoding.
+"""Reading texture images: PNG, JPEG, BMP (Pillow), OpenEXR and Radiance RGBE, checked before
+decoding.
 
 `read_texture_image` returns an image's colours as linear floats `(h, w, 3)`: 8- and 16-bit
-images are decoded from sRGB as Mitsuba 3 does (unless `raw`), float images (EXR, 32-bit
-TIFF) are taken as linear; grey images are repeated into three channels and alpha is dropped.
+images are decoded from sRGB as Mitsuba 3 does (unless `raw`), float images (EXR, RGBE,
+32-bit TIFF) are taken as linear; grey images are repeated into three channels and alpha is dropped.
 The header is read first and an image of more than `MAX_TEXELS` texels is refused before its
 pixels are decoded (a decompression bomb), so that a hostile file cannot exhaust memory.
 Every error is an `OSError` or `ValueError` subclass naming the file.
@@ -14,12 +15,13 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from ...camera import read_exr
+from ...camera import read_exr, read_hdr
 
 __all__ = ["MAX_TEXELS", "TextureFileError", "read_texture_image", "srgb_to_linear"]
 
 MAX_TEXELS = 1 << 26  # 67 M texels (8192 x 8192): 0.8 GB of float32 coefficients
 _PIL_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff")
+_RGBE_SUFFIXES = (".hdr", ".rgbe", ".pic")
 
 
 class TextureFileError(ValueError):
@@ -37,7 +39,8 @@ def read_texture_image(path, *, raw: bool = False) -> np.ndarray:
 
     **Arguments:**
 
-    - `path`: a `.png`, `.jpg`/`.jpeg`, `.bmp`, `.tga`, `.tif`/`.tiff` or `.exr` file. [path]
+    - `path`: a `.png`, `.jpg`/`.jpeg`, `.bmp`, `.tga`, `.tif`/`.tiff`, `.exr` or Radiance
+        `.hdr`/`.rgbe`/`.pic` file. [path]
     - `raw`: keep integer images' stored values (no sRGB decoding), as Mitsuba's `raw`.
 
     **Returns:**
@@ -47,7 +50,7 @@ def read_texture_image(path, *, raw: bool = False) -> np.ndarray:
     **Raises:**
 
     `FileNotFoundError` for a missing file; `TextureFileError` (a `ValueError`) naming the
-    file for an unsupported format (Radiance `.hdr` included), a corrupt or truncated file,
+    file for an unsupported format, a corrupt or truncated file,
     an image of more than `MAX_TEXELS` texels (checked in the header, before decoding), an
     unsupported pixel format or non-finite or negative float texels.
 
@@ -68,15 +71,21 @@ def read_texture_image(path, *, raw: bool = False) -> np.ndarray:
         rgb = np.asarray(rgb, np.float64)
     elif suffix in _PIL_SUFFIXES:
         rgb = _read_pillow(path, raw)
-    elif suffix == ".hdr":
-        raise TextureFileError(
-            f"{path}: Radiance .hdr textures are not supported (no reader among the "
-            "dependencies); convert the image to OpenEXR (.exr)."
-        )
+    elif suffix in _RGBE_SUFFIXES:
+        try:
+            rgb, _ = read_hdr(path)
+        except (OSError, ValueError) as e:
+            raise TextureFileError(f"{path}: not a readable Radiance RGBE texture ({e}).") from None
+        if rgb.shape[0] * rgb.shape[1] > MAX_TEXELS:
+            raise TextureFileError(
+                f"{path}: {rgb.shape[1]} x {rgb.shape[0]} texels; textures must have at most "
+                f"{MAX_TEXELS} texels."
+            )
+        rgb = np.asarray(rgb, np.float64)
     else:
         raise TextureFileError(
             f"{path}: unsupported texture format {suffix!r}; supported: "
-            f"{sorted({*_PIL_SUFFIXES, '.exr'})}."
+            f"{sorted({*_PIL_SUFFIXES, *_RGBE_SUFFIXES, '.exr'})}."
         )
     if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.shape[0] < 1 or rgb.shape[1] < 1:
         raise TextureFileError(f"{path}: expected an image of 3 channels, got shape {rgb.shape}.")
