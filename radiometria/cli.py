@@ -15,13 +15,17 @@ Every command except `cache` keeps XLA's compiled programs in the persistent com
 scene of the same shape does not compile again; `radiometria --no-cache ...` or
 `RADIOMETRIA_NO_CACHE=1` turns it off.
 
-Each long task shows a progress bar on stderr (tqdm).
+Each long task shows a progress bar on stderr (tqdm). `radiometria --timing ...` (or
+`RADIOMETRIA_TIMING=1`) writes timestamps of the start-up's phases to stderr: imports, scene
+load, scene compile, the first step's trace and compile or cache load, render, image written.
 """
 
 import argparse
 import os
 import sys
 from pathlib import Path
+
+from ._timing import TIMING_ENV, mark
 
 __all__ = ["main"]
 
@@ -130,6 +134,11 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="do not use the persistent compilation cache (also: RADIOMETRIA_NO_CACHE=1)",
     )
+    parser.add_argument(
+        "--timing",
+        action="store_true",
+        help="write timestamps of the start-up's phases to stderr (also: RADIOMETRIA_TIMING=1)",
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("figures", help="write every thesis figure (PNG and PDF)")
@@ -237,11 +246,15 @@ def main(argv: list[str] | None = None) -> int:
     if args.cpu_devices is not None and args.cpu_devices < 1:
         parser.error(f"--cpu-devices must be a positive integer, got {args.cpu_devices}")
     _configure_cpu_devices(args.cpu_devices)
+    if args.timing:
+        os.environ[TIMING_ENV] = "1"
+    mark("arguments parsed")
     try:
         if getattr(args, "uses_jax", True) and not args.no_cache:
             from .render import enable_compilation_cache
 
             enable_compilation_cache()
+            mark("imports (jax, radiometria.render) and the compilation cache")
         return int(args.func(args) or 0)
     except (ValueError, TypeError, OSError) as err:
         print(f"radiometria: error: {err}", file=sys.stderr)

@@ -15,13 +15,17 @@ cacheable.
 
 import contextlib
 import os
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 import equinox as eqx
 import equinox._errors as _eqx_errors
 import jax
+import jax.monitoring
 from jax.experimental.compilation_cache import compilation_cache as _jax_cache
+
+from .._timing import mark
 
 __all__ = [
     "CompilationCacheInfo",
@@ -31,6 +35,7 @@ __all__ = [
     "compilation_cache_info",
     "compilation_cache_disabled",
     "enable_compilation_cache",
+    "jax_activity",
 ]
 
 NO_CACHE_ENV = "RADIOMETRIA_NO_CACHE"
@@ -215,3 +220,55 @@ def checks_without_callbacks():
         yield
     finally:
         _eqx_errors.branched_error_if_impl_jit = default
+
+
+# JAX's monitoring events (jax._src.dispatch, jax._src.compiler): Python tracing of a jitted
+# function, its lowering to StableHLO, XLA's compilation, and a load from the persistent cache.
+_TRACE_EVENT = "/jax/core/compile/jaxpr_trace_duration"
+_LOWER_EVENT = "/jax/core/compile/jaxpr_to_mlir_module_duration"
+_COMPILE_EVENT = "/jax/core/compile/backend_compile_duration"
+_CACHE_LOAD_EVENT = "/jax/compilation_cache/cache_retrieval_time_sec"
+_KINDS = {_TRACE_EVENT: "traced", _LOWER_EVENT: "lowered", _COMPILE_EVENT: "compiled",
+          _CACHE_LOAD_EVENT: "loaded from the cache"}  # fmt: skip
+
+
+class _JaxActivity:
+    """Counts and seconds of JAX's tracing, lowering, compiling and cache loads since the last
+    `summary()`; events longer than `loud_s` are marked (`radiometria._timing.mark`) as they
+    end, so the first render step's trace and compile or load show with timestamps."""
+
+    loud_s = 0.05  # s
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._counts: dict[str, list] = {}
+        self._registered = False
+
+    def start(self) -> None:
+        with self._lock:
+            if not self._registered:
+                jax.monitoring.register_event_duration_secs_listener(self._on_duration)
+                self._registered = True
+
+    def _on_duration(self, event: str, duration: float, **kwargs) -> None:
+        kind = _KINDS.get(event)
+        if kind is None:
+            return
+        with self._lock:
+            count = self._counts.setdefault(kind, [0, 0.0])
+            count[0] += 1
+            count[1] += duration
+        if duration >= self.loud_s:
+            name = kwargs.get("fun_name")
+            mark(f"  jax: {kind} {name + ' ' if name else ''}in {duration:.3f} s")
+
+    def summary(self) -> str:
+        """`"jax: 12 traced 0.210 s, ..."` since the last summary (empty if nothing ran)."""
+        with self._lock:
+            counts, self._counts = self._counts, {}
+        parts = [f"{n} {kind} {s:.3f} s" for kind, (n, s) in counts.items()]
+        return f"  [jax: {', '.join(parts)}]" if parts else ""
+
+
+jax_activity = _JaxActivity()
+"""The process's `_JaxActivity` recorder (`start()` registers it with `jax.monitoring`)."""

@@ -14,17 +14,20 @@ import sys
 import tempfile
 from pathlib import Path
 
+from .._timing import mark, timing_enabled
 from ..camera import write_exr, write_png, write_spectral_exr
 from ._cache import (
+    checks_without_callbacks,
     clear_compilation_cache,
     compilation_cache_dir,
     compilation_cache_disabled,
     compilation_cache_info,
+    jax_activity,
 )
 from ._driver import RenderInterrupted, render
 from ._integrators import AbstractIntegrator
 from ._registry import SAMPLERS
-from ._scenes import load_scene, scene_integrator, scene_sampler
+from ._scenes import compile_scene, load_scene, scene_integrator, scene_sampler
 
 __all__ = [
     "MAX_IMAGE_SIDE",
@@ -136,23 +139,33 @@ def _render_to(
             f"-D {next(iter(params))}=... sets a Mitsuba XML <default>; {str(scene_name)!r} "
             "is not an .xml scene."
         )
+    if timing_enabled():
+        jax_activity.start()
+        mark("command checked" + jax_activity.summary())
     description = load_scene(scene_name, params=params or None)
+    mark("scene loaded" + jax_activity.summary())
     chosen = _integrator(description, integrator, max_depth)
     # --sampler, else the file's sampler, else the one with the lowest error per unit time.
     chosen_sampler = (
         scene_sampler(description, default="sobol") if sampler is None else SAMPLERS[sampler]()
     )
+    # Compiled here rather than in `render`, as `render` would (the loader has checked the
+    # values: no host callbacks, `_cache.py`), so that the timing sees the phase.
+    with checks_without_callbacks():
+        scene, camera, rfilter = compile_scene(description, width=width, height=height)
+    mark("scene compiled" + jax_activity.summary())
     rgb = render(
-        description,
+        scene,
+        camera=camera,
+        rfilter=rfilter,
         spp=spp,
         seed=seed,
-        width=width,
-        height=height,
         integrator=chosen,
         sampler=chosen_sampler,
         progress=progress,
         **long_render,
     )
+    mark("rendered" + jax_activity.summary())
     metadata = {
         "software": f"radiometria {importlib.metadata.version('radiometria')}",
         "scene": str(scene_name),
@@ -232,6 +245,7 @@ def render_command(args: argparse.Namespace) -> int:
         )
         return 130 if stop.signal_name == "SIGINT" else 143
     _write(out, rgb, {**metadata, "spp_reached": int(spp)})
+    mark("image written" + jax_activity.summary())
     if not args.checkpoint and checkpoint.exists():
         checkpoint.unlink()  # the default checkpoint of a finished render is not needed
     print(out)
