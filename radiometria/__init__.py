@@ -45,11 +45,13 @@ if TYPE_CHECKING:
         upsampling as upsampling,
     )
 
-__version__ = importlib.metadata.version("radiometria")
 __all__ = [*_SUBPACKAGES, "__version__"]
 
 
 def __getattr__(name: str):
+    if name == "__version__":  # importlib.metadata costs ~50 ms: `radiometria --help` skips it
+        globals()[name] = version = importlib.metadata.version("radiometria")
+        return version
     if name in _SUBPACKAGES:
         module = importlib.import_module(f"{__name__}.{name}")
         globals()[name] = module
@@ -58,4 +60,4 @@ def __getattr__(name: str):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_SUBPACKAGES))
+    return sorted(set(globals()) | set(_SUBPACKAGES) | {"__version__"})

@@ -56,12 +56,12 @@ memory).
 """
 
 import functools
+import importlib
 from pathlib import Path
 
 import numpy as np
 
 from ..colorimetry import get_colourspace
-from ._fit_lut import fit_lut
 from ._io import encode_planes as encode_planes, load_lut
 from ._lut import RGBToSpectrumLUT
 
@@ -94,6 +94,12 @@ def read_packaged(path: Path = SRGB_FILE) -> tuple[np.ndarray, np.ndarray, dict]
     (shapes, finiteness, sha256)."""
     lut, info = load_lut(path, with_info=True)
     return np.asarray(lut.scale), np.asarray(lut.coeffs), info["metadata"]
+
+
+def fit_lut(*args, **kwargs):
+    """`upsampling.fit_lut`, its module imported on the first call: rendering with a packaged
+    table does not pay for importing the fitter and its solvers (optimistix, lineax)."""
+    return importlib.import_module(f"{__package__}._fit_lut").fit_lut(*args, **kwargs)
 
 
 @functools.lru_cache(maxsize=8)

@@ -34,7 +34,12 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
 from ._forward import ForwardModel, XYZ_to_Lab_white, forward_model, lab_f
-from ._sigmoid_polynomial import _sigmoid, normalised_to_nm_coefficients
+from ._lut import _check_rgb_values as _check_rgb_values
+from ._sigmoid_polynomial import (
+    _sigmoid,
+    grey_coefficients as grey_coefficients,
+    normalised_to_nm_coefficients,
+)
 
 # Delta E*ab: the table's per-entry convergence criterion (the float32 floor is ~2e-3 near white).
 DEFAULT_TOLERANCE = 5e-3
@@ -298,17 +303,6 @@ class FitResult(eqx.Module):
     num_steps: Array
 
 
-def grey_coefficients(value: Array) -> Array:
-    r"""Normalised (and nm) coefficients of the flat spectrum $S = v$: $(0, 0, x)$ with
-    $s(x) = v$, i.e. $x = (v - 1/2)/\sqrt{v(1-v)}$; $\pm\infty$ for $v = 1$ / $v = 0$ (pbrt)."""
-    v = value
-    inner = v * (1.0 - v)
-    safe = jnp.where(inner > 0, inner, 1.0)
-    x = jnp.where(inner > 0, (v - 0.5) / jnp.sqrt(safe), jnp.where(v >= 1.0, jnp.inf, -jnp.inf))
-    zero = jnp.zeros_like(x)
-    return jnp.stack([zero, zero, x], axis=-1)
-
-
 @eqx.filter_jit
 def _fit_rgb_jit(rgb, y0, m, solver, max_steps):
     def one(rgb1, y01):
@@ -394,30 +388,3 @@ def fit_rgb(
         result=jax.tree_util.tree_map(lambda a: a.reshape(batch), result),
         num_steps=steps.reshape(batch),
     )
-
-
-def _check_rgb_values(rgb: Array, *, upper: float | None = 1.0, name: str = "rgb") -> Array:
-    """Static-if-possible check: components finite, >= 0 and (if `upper`) <= upper."""
-    if isinstance(rgb, jax.core.Tracer):
-        bad = ~jnp.isfinite(rgb) | (rgb < 0)
-        if upper is not None:
-            bad = bad | (rgb > upper)
-        return eqx.error_if(
-            rgb, bad, f"`{name}` components must be finite and in [0, {upper}] (linear RGB)."
-        )
-    a = np.asarray(rgb)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(
-            f"`{name}` has non-finite components (NaN or inf); linear RGB must be finite."
-        )
-    if np.any(a < 0):
-        raise ValueError(
-            f"`{name}` has negative components (min {a.min():.6g}); linear RGB must be >= 0 "
-            "(out-of-gamut colours: convert or clip them first)."
-        )
-    if upper is not None and np.any(a > upper):
-        raise ValueError(
-            f"`{name}` has components > {upper} (max {a.max():.6g}); use RGBUnboundedSpectrum "
-            "or RGBIlluminantSpectrum for values above 1."
-        )
-    return rgb

@@ -18,13 +18,13 @@ row, grey column, white), and read and written by `load_lut` / `save_lut` (`_io.
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
-from ._fit import _check_rgb_values, grey_coefficients
-from ._sigmoid_polynomial import common_float_dtype
+from ._sigmoid_polynomial import common_float_dtype, grey_coefficients
 
 
 def brightness_scale(resolution: int, dtype=np.float64) -> np.ndarray:
@@ -100,6 +100,33 @@ class RGBToSpectrumLUT(eqx.Module):
         rgb = check_last_axis(as_float_array(rgb, "rgb"), "rgb", 3)
         rgb = _check_rgb_values(rgb)
         return lookup(self, rgb)
+
+
+def _check_rgb_values(rgb: Array, *, upper: float | None = 1.0, name: str = "rgb") -> Array:
+    """Static-if-possible check: components finite, >= 0 and (if `upper`) <= upper."""
+    if isinstance(rgb, jax.core.Tracer):
+        bad = ~jnp.isfinite(rgb) | (rgb < 0)
+        if upper is not None:
+            bad = bad | (rgb > upper)
+        return eqx.error_if(
+            rgb, bad, f"`{name}` components must be finite and in [0, {upper}] (linear RGB)."
+        )
+    a = np.asarray(rgb)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(
+            f"`{name}` has non-finite components (NaN or inf); linear RGB must be finite."
+        )
+    if np.any(a < 0):
+        raise ValueError(
+            f"`{name}` has negative components (min {a.min():.6g}); linear RGB must be >= 0 "
+            "(out-of-gamut colours: convert or clip them first)."
+        )
+    if upper is not None and np.any(a > upper):
+        raise ValueError(
+            f"`{name}` has components > {upper} (max {a.max():.6g}); use RGBUnboundedSpectrum "
+            "or RGBIlluminantSpectrum for values above 1."
+        )
+    return rgb
 
 
 def _argmax_pbrt(rgb: Array) -> Array:

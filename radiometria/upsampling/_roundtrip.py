@@ -21,9 +21,8 @@ from jaxtyping import ArrayLike
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
 from ..colorimetry import delta_E_CIE2000, get_colourspace
-from ._fit import _check_rgb_values
 from ._forward import XYZ_to_Lab_white, forward_model
-from ._lut import RGBToSpectrumLUT, lookup
+from ._lut import RGBToSpectrumLUT, _check_rgb_values, lookup
 from ._sigmoid_polynomial import _evaluate
 
 

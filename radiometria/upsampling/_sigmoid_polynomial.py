@@ -84,6 +84,17 @@ def sigmoid_jakob2019(x: ArrayLike) -> Array:
     return _sigmoid(as_float_array(x, "x"))
 
 
+def grey_coefficients(value: Array) -> Array:
+    r"""Normalised (and nm) coefficients of the flat spectrum $S = v$: $(0, 0, x)$ with
+    $s(x) = v$, i.e. $x = (v - 1/2)/\sqrt{v(1-v)}$; $\pm\infty$ for $v = 1$ / $v = 0$ (pbrt)."""
+    v = value
+    inner = v * (1.0 - v)
+    safe = jnp.where(inner > 0, inner, 1.0)
+    x = jnp.where(inner > 0, (v - 0.5) / jnp.sqrt(safe), jnp.where(v >= 1.0, jnp.inf, -jnp.inf))
+    zero = jnp.zeros_like(x)
+    return jnp.stack([zero, zero, x], axis=-1)
+
+
 def _as_coeffs(coeffs, name: str = "coeffs") -> Array:
     return check_last_axis(as_float_array(coeffs, name), name, 3)
 

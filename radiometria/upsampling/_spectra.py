@@ -35,9 +35,8 @@ from jaxtyping import Array, ArrayLike, Float
 from .._checks import as_float_array, check_last_axis
 from ..colorimetry import get_colourspace
 from ..radiometry import AbstractSpectrum
-from ._fit import _check_rgb_values
 from ._forward import forward_model
-from ._lut import RGBToSpectrumLUT, lookup
+from ._lut import RGBToSpectrumLUT, _check_rgb_values, lookup
 from ._sigmoid_polynomial import _evaluate, common_float_dtype
 
 
