@@ -35,8 +35,8 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from ..colorimetry import daylight_spd, get_colourspace, get_illuminant, tristimulus_weights
-from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
+from ..colorimetry import daylight_spd, get_cmfs, get_colourspace, get_illuminant
+from ..constants import K_M, VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 
 DEFAULT_OBSERVER = "CIE 1931 2 Degree Standard Observer"
 # CCT of the ACES white: CIE daylight at 6000 K on the pre-1968 temperature scale.
@@ -91,11 +91,38 @@ def _space(colourspace):
     return get_colourspace(colourspace)
 
 
-def _illuminant_values(whitepoint_name: str, wl: Array) -> Array:
-    if whitepoint_name == "ACES":
-        return daylight_spd(ACES_WHITE_CCT, wl)
-    ill = get_illuminant(whitepoint_name)
-    return jnp.interp(wl, ill.wavelengths_nm.astype(wl.dtype), ill.values.astype(wl.dtype))
+def _illuminant_values(whitepoint_name: str, wl: np.ndarray) -> np.ndarray:
+    """The space's illuminant on the grid `wl` [nm], float64 NumPy: a tabulated CIE
+    illuminant interpolated linearly (constant beyond its table, as `jnp.interp`), or for the
+    ACES white CIE daylight (`colorimetry.daylight_spd`, in float64)."""
+    with jax.enable_x64(True):  # the tables as packaged (float64), not JAX's default float32
+        if whitepoint_name == "ACES":
+            return np.asarray(daylight_spd(ACES_WHITE_CCT, jnp.asarray(wl)), np.float64)
+        ill = get_illuminant(whitepoint_name)
+    return np.interp(wl, np.asarray(ill.wavelengths_nm), np.asarray(ill.values))
+
+
+def _tristimulus_weights(wl: np.ndarray, illuminant: np.ndarray | None) -> np.ndarray:
+    """`colorimetry.tristimulus_weights(wl, illuminant)` (CIE 1931 2°) in float64 NumPy.
+
+    The same rectangle rule (cell widths: the first and last steps at the ends, the mean of
+    the two neighbouring steps inside) and linear CMF interpolation, zero outside the table;
+    evaluated with NumPy because a process that renders needs these weights once, and JAX
+    would trace, lower and load a program for them (about 0.1 s of every render's start-up).
+    `tests/upsampling/test_forward.py` checks it against the JAX function.
+    """
+    with jax.enable_x64(True):  # the table as packaged (float64)
+        cmfs = get_cmfs(DEFAULT_OBSERVER)
+    cmf_wl, cmf_v = np.asarray(cmfs.wavelengths_nm), np.asarray(cmfs.values)
+    table = np.stack(
+        [np.interp(wl, cmf_wl, cmf_v[:, k], left=0.0, right=0.0) for k in range(3)], axis=-1
+    )
+    d = np.diff(wl)
+    w = table * np.concatenate([d[:1], 0.5 * (d[:-1] + d[1:]), d[-1:]])[:, None]
+    if illuminant is None:
+        return K_M * w
+    w = illuminant[:, None] * w
+    return w / np.sum(w[:, 1])
 
 
 @functools.lru_cache(maxsize=16)
@@ -103,16 +130,9 @@ def _forward_model_cached(name: str, step_nm: float) -> ForwardModel:
     cs = _space(name)
     n = int(round((VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM) / step_nm)) + 1
     wl_np = np.linspace(VISIBLE_WAVELENGTH_MIN_NM, VISIBLE_WAVELENGTH_MAX_NM, n)
-    with jax.enable_x64(True):
-        # One compiled program instead of dozens of eagerly dispatched operations.
-        @jax.jit
-        def compute(wl):
-            ill = _illuminant_values(cs.whitepoint_name, wl)
-            return ill, tristimulus_weights(wl, ill), tristimulus_weights(wl, None)
-
-        ill, w_xyz, w_emissive = (
-            np.asarray(a, np.float64) for a in compute(jnp.asarray(wl_np, dtype=jnp.float64))
-        )
+    ill = _illuminant_values(cs.whitepoint_name, wl_np)
+    w_xyz = _tristimulus_weights(wl_np, ill)
+    w_emissive = _tristimulus_weights(wl_np, None)
     to_xyz = np.asarray(cs.matrix_RGB_to_XYZ, dtype=np.float64)
     to_rgb = np.asarray(cs.matrix_XYZ_to_RGB, dtype=np.float64)
     w_rgb = w_xyz @ to_rgb.T
