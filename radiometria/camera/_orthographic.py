@@ -17,6 +17,8 @@ from ._pinhole import (
     _check_camera_fields,
     _check_clip,
     _check_film_and_matrix,
+    _crop_field,
+    _film_window,
     _point_to_world,
     _raster_to_ndc,
     look_at,
@@ -34,6 +36,8 @@ class OrthographicCamera(AbstractCamera):
         1 in camera space). [scene units]
     - `width`, `height`: film size (static). [px]
     - `near_clip`, `far_clip`: clip distances; rays start at `near_clip`. [scene units]
+    - `crop`: `None`, or `(offset_x, offset_y, full_width, full_height)` (static): the image
+        is that window of a larger film (`PinholeCamera`'s `crop`). [px]
 
     !!! note "Thesis"
         Section 2.3.1 (camera models and coordinate spaces).
@@ -47,6 +51,7 @@ class OrthographicCamera(AbstractCamera):
     height: int = eqx.field(static=True)
     near_clip: Float[Array, ""] = eqx.field(default=1e-2, converter=jnp.asarray)
     far_clip: Float[Array, ""] = eqx.field(default=1e4, converter=jnp.asarray)
+    crop: tuple[int, int, int, int] | None = eqx.field(default=None, static=True)
 
     def __check_init__(self):
         _check_camera_fields(self)
@@ -60,6 +65,7 @@ class OrthographicCamera(AbstractCamera):
         *,
         near_clip: float = 1e-2,
         far_clip: float = 1e4,
+        crop_window=None,
     ) -> "OrthographicCamera":
         """An orthographic camera from its camera-to-world matrix.
 
@@ -69,6 +75,8 @@ class OrthographicCamera(AbstractCamera):
             (scale it to image a region wider than 2 x 2/aspect). [scene units]
         - `width`, `height`: film size, integers >= 1. [px]
         - `near_clip`, `far_clip`: clip distances, `0 < near < far`. [scene units]
+        - `crop_window`: `None` or Mitsuba's film crop `(offset_x, offset_y, crop_width,
+            crop_height)` of the `width` x `height` film (`PinholeCamera.from_to_world`). [px]
 
         **Returns:**
 
@@ -82,7 +90,8 @@ class OrthographicCamera(AbstractCamera):
         """
         m, width, height = _check_film_and_matrix(to_world, width, height)
         near, far = _check_clip(near_clip, far_clip)
-        return cls(m, width, height, near, far)
+        w, h, crop = _crop_field(crop_window, width, height)
+        return cls(m, w, h, near, far, crop=crop)
 
     @classmethod
     def from_look_at(
@@ -134,9 +143,9 @@ class OrthographicCamera(AbstractCamera):
         xy = check_last_axis(as_float_array(raster_xy, "raster_xy"), "raster_xy", 2)
         dtype = xy.dtype
         m = self.to_world.astype(dtype)
-        aspect = self.width / self.height
-        x, y = _raster_to_ndc(xy, self.width, self.height)
-        y = y / aspect
+        _, _, fw, fh = _film_window(self)
+        x, y = _raster_to_ndc(xy, self)
+        y = y * (fh / fw)
         z = jnp.broadcast_to(self.near_clip.astype(dtype), x.shape)
         p = jnp.stack([x, y, z], axis=-1)
         o = _point_to_world(m, p)

@@ -77,9 +77,11 @@ def _check_clip(near, far) -> tuple[Array, Array]:
 
 
 def _check_camera_fields(camera) -> None:
-    """The checks every camera's `__check_init__` shares: film size and a 4x4 `to_world`."""
+    """The checks every camera's `__check_init__` shares: film size, crop window and a 4x4
+    `to_world`."""
     check_positive_int(camera.width, "width")
     check_positive_int(camera.height, "height")
+    _check_crop(camera)
     if jnp.shape(camera.to_world) != (4, 4):
         raise ValueError(
             f"`to_world` must be a 4x4 matrix, got shape {jnp.shape(camera.to_world)}."
@@ -93,10 +95,61 @@ def _check_film_and_matrix(to_world, width, height) -> tuple[Array, int, int]:
     return _check_matrix4(to_world, "to_world"), width, height
 
 
-def _raster_to_ndc(xy: Array, width: int, height: int) -> tuple[Array, Array]:
-    """Raster positions (..., 2) [px] to `(x_ndc, y_ndc)` (x flipped: camera +x is the image's
-    left; y flipped: raster y is down)."""
-    return 1.0 - 2.0 * xy[..., 0] / width, 1.0 - 2.0 * xy[..., 1] / height
+def _check_crop(camera) -> None:
+    """A camera's `crop` window `(offset_x, offset_y, full_width, full_height)` [px] must hold
+    its `width` x `height` image inside the full film."""
+    if camera.crop is None:
+        return
+    if len(camera.crop) != 4 or not all(isinstance(v, int) for v in camera.crop):
+        raise ValueError(
+            f"`crop` must be 4 ints (offset_x, offset_y, full_width, full_height) [px], got "
+            f"{camera.crop!r}."
+        )
+    ox, oy, fw, fh = camera.crop
+    if ox < 0 or oy < 0 or ox + camera.width > fw or oy + camera.height > fh:
+        raise ValueError(
+            f"crop window {camera.width} x {camera.height} at ({ox}, {oy}) [px] does not fit in "
+            f"the {fw} x {fh} film: need offset >= 0 and offset + size <= film size."
+        )
+
+
+def _crop_field(crop_window, width: int, height: int) -> tuple[int, int, tuple | None]:
+    """`(image width, image height, crop field)` of a camera built on a `width` x `height`
+    film with Mitsuba's crop window `(offset_x, offset_y, crop_width, crop_height)` [px]
+    (`None`: the whole film)."""
+    if crop_window is None:
+        return width, height, None
+    if len(crop_window) != 4:
+        raise ValueError(
+            "`crop_window` must be (offset_x, offset_y, crop_width, crop_height) [px], got "
+            f"{crop_window!r}."
+        )
+    ox = check_positive_int(crop_window[0] + 1, "crop_offset_x + 1") - 1
+    oy = check_positive_int(crop_window[1] + 1, "crop_offset_y + 1") - 1
+    cw = check_positive_int(crop_window[2], "crop_width")
+    ch = check_positive_int(crop_window[3], "crop_height")
+    return cw, ch, (int(ox), int(oy), width, height)
+
+
+def _film_window(camera) -> tuple[int, int, int, int]:
+    """`(offset_x, offset_y, full_width, full_height)` [px] of the camera's image in its film:
+    the crop window, or the whole film."""
+    return camera.crop if camera.crop is not None else (0, 0, camera.width, camera.height)
+
+
+def _raster_to_ndc(xy: Array, camera, shift=None) -> tuple[Array, Array]:
+    """Raster positions (..., 2) [px] of the camera's image to the full film's
+    `(x_ndc, y_ndc)` (x flipped: camera +x is the image's left; y flipped: raster y is down).
+
+    With a crop window (Mitsuba's `crop_offset_*`), raster $(0, 0)$ is the window's corner;
+    `shift` is a principal point offset `(2,)` in fractions of the film, added to the film
+    position $(x + o_x) / W$, as Mitsuba's `principal_point_offset_*`.
+    """
+    ox, oy, fw, fh = _film_window(camera)
+    u, v = (xy[..., 0] + ox) / fw, (xy[..., 1] + oy) / fh
+    if shift is not None:
+        u, v = u + shift[0], v + shift[1]
+    return 1.0 - 2.0 * u, 1.0 - 2.0 * v
 
 
 def _point_to_world(m: Array, p: Array) -> Array:
@@ -313,8 +366,14 @@ class PinholeCamera(AbstractCamera):
 
     - `to_world`: camera-to-world matrix, (4, 4). [scene units]
     - `fov_x_deg`: horizontal field of view (whatever `fov_axis` the constructor got). [deg]
-    - `width`, `height`: film size in pixels (static). [px]
+    - `width`, `height`: size of the rendered image in pixels (static). [px]
     - `near_clip`, `far_clip`: clip distances used by `projection_matrix`. [scene units]
+    - `principal_point`: `(2,)` offset of the image centre from the optical axis, in
+        fractions of the film's width and height (Mitsuba's `principal_point_offset_x/y`:
+        raster $x$ of the full film sees the ray that $x + W p_x$ sees without it). [-]
+    - `crop`: `None`, or `(offset_x, offset_y, full_width, full_height)` (static): the image
+        is the `width` x `height` window at that offset of a `full_width` x `full_height`
+        film whose field of view is `fov_x_deg` (Mitsuba's film crop window). [px]
 
     !!! note "Thesis"
         Thesis section 2.3.1, eq. 2.28-2.30.
@@ -329,12 +388,19 @@ class PinholeCamera(AbstractCamera):
     height: int = eqx.field(static=True)
     near_clip: Float[Array, ""] = eqx.field(default=1e-2, converter=jnp.asarray)
     far_clip: Float[Array, ""] = eqx.field(default=1e4, converter=jnp.asarray)
+    principal_point: Float[Array, "2"] = eqx.field(default=(0.0, 0.0), converter=jnp.asarray)
+    crop: tuple[int, int, int, int] | None = eqx.field(default=None, static=True)
 
     def __check_init__(self):
         _check_camera_fields(self)
         if jnp.shape(self.fov_x_deg) != ():
             raise ValueError(
                 f"`fov_x_deg` must be a scalar [deg], got shape {jnp.shape(self.fov_x_deg)}."
+            )
+        if jnp.shape(self.principal_point) != (2,):
+            raise ValueError(
+                "`principal_point` must have shape (2,) [fractions of the film], got "
+                f"{jnp.shape(self.principal_point)}."
             )
 
     @classmethod
@@ -348,6 +414,8 @@ class PinholeCamera(AbstractCamera):
         *,
         near_clip: float = 1e-2,
         far_clip: float = 1e4,
+        principal_point=(0.0, 0.0),
+        crop_window=None,
     ) -> "PinholeCamera":
         """A camera from its camera-to-world matrix and field of view.
 
@@ -360,6 +428,11 @@ class PinholeCamera(AbstractCamera):
         - `fov_axis`: `"x"`, `"y"`, `"diagonal"`, `"smaller"` (default; pbrt's rule) or
             `"larger"`. Mitsuba's own default is `"x"`.
         - `near_clip`, `far_clip`: clip distances, `0 < near < far`. [scene units]
+        - `principal_point`: `(2,)` principal point offset in fractions of the film
+            (Mitsuba's `principal_point_offset_x/y`). [-]
+        - `crop_window`: `None` (the whole film) or `(offset_x, offset_y, crop_width,
+            crop_height)`, Mitsuba's film crop: the camera renders that window of the
+            `width` x `height` film. [px]
 
         **Returns:**
 
@@ -374,7 +447,8 @@ class PinholeCamera(AbstractCamera):
         m, width, height = _check_film_and_matrix(to_world, width, height)
         fx = fov_x_deg(fov_deg, width / height, fov_axis)
         near, far = _check_clip(near_clip, far_clip)
-        return cls(m, fx, width, height, near, far)
+        w, h, crop = _crop_field(crop_window, width, height)
+        return cls(m, fx, w, h, near, far, principal_point=principal_point, crop=crop)
 
     @classmethod
     def from_look_at(
@@ -421,8 +495,9 @@ class PinholeCamera(AbstractCamera):
 
     @property
     def aspect(self) -> float:
-        """Image aspect ratio width / height. [dimensionless]"""
-        return self.width / self.height
+        """Aspect ratio width / height of the full film (the crop window's film). [-]"""
+        _, _, fw, fh = _film_window(self)
+        return fw / fh
 
     def tan_half_fov(self) -> tuple[Array, Array]:
         """`(tan(fov_x / 2), tan(fov_y / 2))`: the image's half-extents at unit depth. [-]"""
@@ -434,11 +509,21 @@ class PinholeCamera(AbstractCamera):
         return perspective(self.fov_x_deg, self.aspect, self.near_clip, self.far_clip, fov_axis="x")
 
     def raster_from_ndc(self) -> Float[Array, "4 4"]:
-        """Affine map NDC to raster (x flipped: camera +x is the image's left; y down). [px]"""
-        w, h = float(self.width), float(self.height)
-        dtype = jnp.result_type(self.to_world.dtype, self.fov_x_deg.dtype)
-        return jnp.asarray(
-            [[-w / 2, 0, 0, w / 2], [0, -h / 2, 0, h / 2], [0, 0, 1, 0], [0, 0, 0, 1]], dtype=dtype
+        """Affine map NDC to raster (x flipped: camera +x is the image's left; y down), less
+        the principal point offset and the crop window's offset. [px]"""
+        ox, oy, fw, fh = (float(v) for v in _film_window(self))
+        dtype = np.promote_types(self.to_world.dtype, self.fov_x_deg.dtype)
+        tx, ty = jnp.asarray([fw / 2 - ox, fh / 2 - oy], dtype) - jnp.asarray(
+            [fw, fh], dtype
+        ) * self.principal_point.astype(dtype)
+        zero, one = jnp.zeros((), dtype), jnp.ones((), dtype)
+        return jnp.stack(
+            [
+                jnp.stack([jnp.asarray(-fw / 2, dtype), zero, zero, tx]),
+                jnp.stack([zero, jnp.asarray(-fh / 2, dtype), zero, ty]),
+                jnp.stack([zero, zero, one, zero]),
+                jnp.stack([zero, zero, zero, one]),
+            ]
         )
 
     def generate_ray(
@@ -463,7 +548,8 @@ class PinholeCamera(AbstractCamera):
         r"""The importance $W_e = 1 / (A \cos^4\theta)$ of a ray leaving the pinhole at angle
         $\theta$ to the optical axis, inside the field of view (pbrt's `PerspectiveCamera::We`
         with a pinhole: lens area 1), where $A = 4 \tan\frac{\mathrm{fov}_x}{2}
-        \tan\frac{\mathrm{fov}_y}{2}$ is the film's area at unit distance. Its integral
+        \tan\frac{\mathrm{fov}_y}{2}$ is the film's area at unit distance (times the crop
+        window's share of the film). Its integral
         $\int W_e \cos\theta\, d\omega$ over the film's solid angle is 1, so a film position
         drawn uniformly (what `generate_ray` with uniform raster positions does) has the density
         $W_e \cos\theta$ per unit solid angle. [sr^-1]
@@ -476,7 +562,9 @@ class PinholeCamera(AbstractCamera):
         """
         cos_theta = jnp.asarray(cos_theta)
         tan_x, tan_y = self.tan_half_fov()
-        area = (4.0 * tan_x * tan_y).astype(cos_theta.dtype)
+        _, _, fw, fh = _film_window(self)
+        window = self.width * self.height / (fw * fh)  # the crop window's share of the film
+        area = (4.0 * tan_x * tan_y * window).astype(cos_theta.dtype)
         c2 = cos_theta * cos_theta
         ok = cos_theta > 0
         return jnp.where(ok, 1.0 / (area * jnp.where(ok, c2 * c2, 1.0)), 0.0)
@@ -563,7 +651,7 @@ def generate_ray(
     to_world = camera.to_world.astype(dtype)
     tan_x, tan_y = camera.tan_half_fov()
     tan_x, tan_y = tan_x.astype(dtype), tan_y.astype(dtype)
-    x_ndc, y_ndc = _raster_to_ndc(xy, camera.width, camera.height)
+    x_ndc, y_ndc = _raster_to_ndc(xy, camera, camera.principal_point.astype(dtype))
     d_cam = jnp.stack([x_ndc * tan_x, y_ndc * tan_y, jnp.ones_like(x_ndc)], axis=-1)
     d = jnp.einsum("ij,...j->...i", to_world[:3, :3], d_cam)
     d = d / jnp.linalg.norm(d, axis=-1, keepdims=True)

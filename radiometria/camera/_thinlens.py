@@ -23,6 +23,8 @@ from ._pinhole import (
     _check_camera_fields,
     _check_clip,
     _check_film_and_matrix,
+    _crop_field,
+    _film_window,
     _point_to_world,
     _raster_to_ndc,
     fov_x_deg,
@@ -55,6 +57,8 @@ class ThinLensCamera(AbstractCamera):
     - `focus_distance`: distance $d_f$ of the plane in focus, along $+z$. [scene units]
     - `width`, `height`: film size (static). [px]
     - `near_clip`, `far_clip`: clip distances; rays start at the near plane. [scene units]
+    - `crop`: `None`, or `(offset_x, offset_y, full_width, full_height)` (static): the image
+        is that window of a larger film (`PinholeCamera`'s `crop`). [px]
 
     !!! note "Thesis"
         Section 2.3.1 (camera models).
@@ -74,6 +78,7 @@ class ThinLensCamera(AbstractCamera):
     height: int = eqx.field(static=True)
     near_clip: Float[Array, ""] = eqx.field(default=1e-2, converter=jnp.asarray)
     far_clip: Float[Array, ""] = eqx.field(default=1e4, converter=jnp.asarray)
+    crop: tuple[int, int, int, int] | None = eqx.field(default=None, static=True)
 
     def __check_init__(self):
         _check_camera_fields(self)
@@ -91,6 +96,7 @@ class ThinLensCamera(AbstractCamera):
         *,
         near_clip: float = 1e-2,
         far_clip: float = 1e4,
+        crop_window=None,
     ) -> "ThinLensCamera":
         """A thin-lens camera from its camera-to-world matrix.
 
@@ -104,6 +110,8 @@ class ThinLensCamera(AbstractCamera):
         - `fov_axis`: `"x"` (default, Mitsuba's), `"y"`, `"diagonal"`, `"smaller"`,
             `"larger"` (`radiometria.camera.fov_x_deg`).
         - `near_clip`, `far_clip`: clip distances, `0 < near < far`. [scene units]
+        - `crop_window`: `None` or Mitsuba's film crop `(offset_x, offset_y, crop_width,
+            crop_height)` of the `width` x `height` film (`PinholeCamera.from_to_world`). [px]
 
         **Returns:**
 
@@ -119,7 +127,8 @@ class ThinLensCamera(AbstractCamera):
         fx = fov_x_deg(fov_deg, width / height, fov_axis)
         r, f = _check_lens(aperture_radius, focus_distance)
         near, far = _check_clip(near_clip, far_clip)
-        return cls(m, fx, r, f, width, height, near, far)
+        w, h, crop = _crop_field(crop_window, width, height)
+        return cls(m, fx, r, f, w, h, near, far, crop=crop)
 
     @classmethod
     def from_look_at(
@@ -203,8 +212,9 @@ class ThinLensCamera(AbstractCamera):
         uv = check_last_axis(as_float_array(aperture_uv, "aperture_uv"), "aperture_uv", 2)
         m = self.to_world.astype(dtype)
         tan_x = jnp.tan(jnp.deg2rad(self.fov_x_deg.astype(dtype)) / 2)
-        tan_y = tan_x * (self.height / self.width)
-        x_ndc, y_ndc = _raster_to_ndc(xy, self.width, self.height)
+        _, _, fw, fh = _film_window(self)
+        tan_y = tan_x * (fh / fw)
+        x_ndc, y_ndc = _raster_to_ndc(xy, self)
         f = self.focus_distance.astype(dtype)
         focus = jnp.stack(
             [x_ndc * tan_x * f, y_ndc * tan_y * f, jnp.broadcast_to(f, x_ndc.shape)], -1

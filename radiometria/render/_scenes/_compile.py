@@ -207,7 +207,9 @@ def scene_sampler(
 def scene_camera(description: SceneDescription, width=None, height=None) -> AbstractCamera:
     """The camera of a loaded scene: the `CAMERAS` plugin its `camera.type` names
     (`PinholeCamera`, `ThinLensCamera`, `OrthographicCamera`), `width` x `height` [px]
-    (default: the scene's film)."""
+    (default: the scene's film), with the film's crop window and the sensor's principal
+    point. A film with a crop window keeps its size: another `width`/`height` is a
+    `ValueError`."""
     cam = description.camera
     kind = getattr(cam, "type", "perspective")
     if kind not in CAMERAS:
@@ -217,9 +219,17 @@ def scene_camera(description: SceneDescription, width=None, height=None) -> Abst
         )
     cls = CAMERAS[kind]
     to_world = np.asarray(cam.to_world, np.float64)
-    w = description.film.width if width is None else width
-    h = description.film.height if height is None else height
-    clip = {"near_clip": cam.near_clip, "far_clip": cam.far_clip}
+    film = description.film
+    w = film.width if width is None else width
+    h = film.height if height is None else height
+    crop = getattr(film, "crop", None)
+    if crop is not None and (w, h) != (film.width, film.height):
+        raise ValueError(
+            f"{description.source or 'scene'}: the film renders the crop window {crop[2]} x "
+            f"{crop[3]} at ({crop[0]}, {crop[1]}) of a {film.width} x {film.height} film; "
+            f"width x height {w} x {h} would move it: change the film in the scene file."
+        )
+    clip = {"near_clip": cam.near_clip, "far_clip": cam.far_clip, "crop_window": crop}
     if cls is OrthographicCamera:
         return cls.from_to_world(to_world, w, h, **clip)
     if cls is ThinLensCamera:
@@ -227,7 +237,10 @@ def scene_camera(description: SceneDescription, width=None, height=None) -> Abst
             to_world, float(cam.fov_deg), w, h, cam.aperture_radius, cam.focus_distance,
             cam.fov_axis, **clip,
         )  # fmt: skip
-    return cls.from_to_world(to_world, float(cam.fov_deg), w, h, cam.fov_axis, **clip)
+    pp = getattr(cam, "principal_point", (0.0, 0.0))
+    return cls.from_to_world(
+        to_world, float(cam.fov_deg), w, h, cam.fov_axis, principal_point=pp, **clip
+    )
 
 
 def _surface_attributes(description: SceneDescription) -> dict:

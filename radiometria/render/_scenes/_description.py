@@ -186,6 +186,8 @@ class CameraDescription:
         the scale of `to_world` sets its imaged extent). Mitsuba's sensor names.
     - `aperture_radius`, `focus_distance`: the thin lens's radius and distance of the plane
         in focus (`"thinlens"` only). [scene length unit]
+    - `principal_point`: the principal point offset `(x, y)` in fractions of the film
+        (`"perspective"` only; Mitsuba's `principal_point_offset_x/y`). [-]
 
     !!! note "Thesis"
         Section 2.3.1 (pinhole camera model); Mitsuba's `perspective`, `thinlens` and
@@ -200,6 +202,7 @@ class CameraDescription:
     type: str = "perspective"
     aperture_radius: float = 0.0
     focus_distance: float = 1e4
+    principal_point: tuple[float, float] = (0.0, 0.0)
 
     @property
     def origin(self) -> np.ndarray:
@@ -229,6 +232,9 @@ class FilmDescription:
     - `filter`: filter type: `"box"`, `"tent"`, `"gaussian"`, `"mitchell"`,
         `"catmullrom"` or `"lanczos"` (Mitsuba's names).
     - `filter_params`: e.g. `{"stddev": 0.5, "radius": 2.0}` for the Gaussian. [px]
+    - `crop`: `None` (the whole film), or the crop window `(offset_x, offset_y, crop_width,
+        crop_height)` of the `width` x `height` film that is rendered (Mitsuba's
+        `crop_offset_*`, `crop_width`, `crop_height`); the image is the window's size. [px]
 
     !!! note "Thesis"
         Section 2.3.2 (filtering image samples); Mitsuba's `hdrfilm` (`Jakob2022`).
@@ -238,6 +244,7 @@ class FilmDescription:
     height: int
     filter: str = "gaussian"
     filter_params: dict = dataclasses.field(default_factory=lambda: {"stddev": 0.5, "radius": 2.0})
+    crop: tuple[int, int, int, int] | None = None
 
 
 @dataclasses.dataclass(frozen=True)

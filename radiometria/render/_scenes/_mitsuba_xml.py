@@ -803,13 +803,12 @@ def _sensor(ctx: _Ctx, node: _Node):
     props = _properties(ctx, node, _SENSOR_PARAMS[kind])
     lens = _sensor_lens(ctx, node, kind, props)
     # `focus_distance` of a `perspective` sensor is read and unused, as in Mitsuba 3 (only a
-    # `thinlens` has a focal plane). A principal point offset is not implemented: refused.
-    for name in ("principal_point_offset_x", "principal_point_offset_y"):
-        if props.get(name, 0.0) != 0.0:
-            raise ctx.err(
-                node, f"parameter '{name}' = {props[name]} is not supported (only 0: the image "
-                "centre on the optical axis)"
-            )  # fmt: skip
+    # `thinlens` has a focal plane).
+    if kind == "perspective":
+        pp = tuple(float(props.get(f"principal_point_offset_{a}", 0.0)) for a in "xy")
+        if not all(math.isfinite(v) for v in pp):
+            raise ctx.err(node, f"principal_point_offset_x/y must be finite, got {pp}")
+        lens["principal_point"] = pp
     to_world = props.get("to_world", np.eye(4))
     if not abs(np.linalg.det(to_world[:3, :3])) > 1e-12:
         raise ctx.err(node, "degenerate camera transform: its 3x3 part is singular")
@@ -876,14 +875,24 @@ def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
     width, height = props.get("width", 768), props.get("height", 576)
     if width < 1 or height < 1:
         raise ctx.err(node, f"width and height must be >= 1 [px], got {width} x {height}")
-    # A crop window other than the whole film is not implemented: refused (file, line, name).
-    full = {"crop_offset_x": 0, "crop_offset_y": 0, "crop_width": width, "crop_height": height}
-    for name, value in full.items():
-        if props.get(name, value) != value:
-            raise ctx.err(
-                node, f"parameter '{name}' = {props[name]} is not supported: crop windows are "
-                f"not implemented (only the whole {width} x {height} film)"
-            )  # fmt: skip
+    # A crop window (Mitsuba's defaults: the whole film) must lie inside the film.
+    crop = (
+        props.get("crop_offset_x", 0), props.get("crop_offset_y", 0),
+        props.get("crop_width", width), props.get("crop_height", height),
+    )  # fmt: skip
+    if (
+        crop[0] < 0
+        or crop[1] < 0
+        or crop[2] < 1
+        or crop[3] < 1
+        or (crop[0] + crop[2] > width or crop[1] + crop[3] > height)
+    ):
+        raise ctx.err(
+            node, f"crop window {crop[2]} x {crop[3]} at ({crop[0]}, {crop[1]}) [px] does not "
+            f"fit in the {width} x {height} film (offsets >= 0, sizes >= 1, offset + size <= "
+            "film size)"
+        )  # fmt: skip
+    crop = None if crop == (0, 0, width, height) else crop
     kind_f, params = "gaussian", dict(_FILTER_DEFAULTS["gaussian"])
     for ch in node.children:
         if ch.tag == "rfilter":
@@ -896,7 +905,9 @@ def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
             params.update(p)
     if kind_f == "gaussian" and "radius" not in params:
         params["radius"] = 4.0 * params["stddev"]
-    return FilmDescription(width=width, height=height, filter=kind_f, filter_params=params)
+    return FilmDescription(
+        width=width, height=height, filter=kind_f, filter_params=params, crop=crop
+    )
 
 
 # ---------------------------------------------------------------------------------------------
