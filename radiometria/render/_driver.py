@@ -239,14 +239,26 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     active = jnp.repeat(valid_pixel, k) & (passes < spp)
     if _splats_only(kernel.integrator):
         return _trace_splats(kernel, pix, wavelength_nm, pdf, variates, active, cfg=cfg)
-    radiance = kernel.integrator.radiance(
-        kernel.scene,
-        origins.astype(dtype),
-        directions.astype(dtype),
-        wavelength_nm.astype(dtype),
-        variates,
-        active,
-    )
+    bidirectional = _bidirectional(kernel.integrator)
+    if bidirectional:  # camera-ray radiance and light-path splats from the same paths (`BDPT`)
+        radiance, sp = kernel.integrator.radiance_and_splats(
+            kernel.scene,
+            kernel.camera,
+            origins.astype(dtype),
+            directions.astype(dtype),
+            wavelength_nm.astype(dtype),
+            variates,
+            active,
+        )
+    else:
+        radiance = kernel.integrator.radiance(
+            kernel.scene,
+            origins.astype(dtype),
+            directions.astype(dtype),
+            wavelength_nm.astype(dtype),
+            variates,
+            active,
+        )
     xyz = film_samples_to_XYZ(kernel.response, radiance, wavelength_nm, pdf)
     ok = active & jnp.all(jnp.isfinite(xyz), axis=-1)
     if cfg.spectral_bins:  # the spectral film's bins travel after [wX, wY, wZ, w]
@@ -261,17 +273,37 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     values = values.reshape(t, k, channels)
     radius = _footprint_radius(cfg, kernel.rfilter)
     if radius == 0:
-        return jnp.sum(values, axis=1).reshape(t, 1, 1, channels)
-    d = jnp.arange(-radius, radius + 1, dtype=dtype)
-    # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis.
-    to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
-    f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
-    return jnp.einsum("tkj,tki,tkc->tjic", f1[..., 1], f1[..., 0], values)
+        footprints = jnp.sum(values, axis=1).reshape(t, 1, 1, channels)
+    else:
+        d = jnp.arange(-radius, radius + 1, dtype=dtype)
+        # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis.
+        to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
+        f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
+        footprints = jnp.einsum("tkj,tki,tkc->tjic", f1[..., 1], f1[..., 0], values)
+    if not bidirectional:
+        return footprints
+    # Camera-ray and splat estimates share one normalisation: with splatting reconstruction
+    # the pixel's weight is the filter's film integral F_j per slot (pbrt's 1/spp splat scale;
+    # the camera part is then the unbiased filtered estimate sum f L / (spp F_j)); with filter
+    # importance sampling the usual weights (whose expectation per slot is F_j) are kept.
+    sp_footprints, sp_raster, sp_xyz = _splats_to_xyz(
+        kernel, sp, pix, wavelength_nm, pdf, active, cfg=cfg
+    )
+    if cfg.reconstruction != "importance":
+        footprints = footprints.at[..., 3].set(0.0)
+        footprints = footprints.at[:, radius, radius, 3].set(sp_footprints[:, 0, 0, 3])
+    return footprints, sp_raster, sp_xyz
 
 
 def _splats_only(integrator) -> bool:
     """The integrator estimates nothing per camera ray and splats everything (`PTracer`)."""
     return bool(getattr(integrator, "SPLATS_ONLY", False))
+
+
+def _bidirectional(integrator) -> bool:
+    """The integrator estimates radiance per camera ray and splats light-path vertices too
+    (`BDPT`: its `radiance_and_splats`)."""
+    return bool(getattr(integrator, "BIDIRECTIONAL", False))
 
 
 def _film_filter_integral(rfilter, centre, size: int):
@@ -295,11 +327,17 @@ def _trace_splats(kernel: _Kernel, pix, wavelength_nm, pdf, variates, active, *,
 
     Returns `(footprints (t, 1, 1, 4), raster (m, 2), xyz (m, 3))`, `m` = vertices x paths.
     """
+    sp = kernel.integrator.splats(
+        kernel.scene, kernel.camera, wavelength_nm.astype(jnp.float32), variates, active
+    )
+    return _splats_to_xyz(kernel, sp, pix, wavelength_nm, pdf, active, cfg=cfg)
+
+
+def _splats_to_xyz(kernel: _Kernel, sp, pix, wavelength_nm, pdf, active, *, cfg: _Config):
+    """`Splats` as XYZ at their raster positions, and per pixel the weight $F_j$ per active
+    slot (`_trace_splats`)."""
     dtype = jnp.float32
     t, k = pix.shape[0] // cfg.passes, cfg.passes
-    sp = kernel.integrator.splats(
-        kernel.scene, kernel.camera, wavelength_nm.astype(dtype), variates, active
-    )
     xyz = film_samples_to_XYZ(kernel.response, sp.value, wavelength_nm[None], pdf[None])
     ok = sp.valid & jnp.all(jnp.isfinite(xyz), axis=-1)
     xyz = jnp.where(ok[..., None], xyz, 0.0).astype(dtype).reshape(-1, 3)
@@ -634,9 +672,9 @@ def _check_spectral_bins(spectral_bins, integrator, checkpoint) -> int:
             f"`spectral_bins` must be in [1, {MAX_SPECTRAL_BINS}] (bins over [360, 830] nm), "
             f"got {spectral_bins}."
         )
-    if _splats_only(integrator):
+    if _splats_only(integrator) or _bidirectional(integrator):
         raise ValueError(
-            f"`spectral_bins` is not supported with the splatting-only integrator "
+            f"`spectral_bins` is not supported with the splatting integrator "
             f"{type(integrator).__name__}; use an RGB render or another integrator."
         )
     if checkpoint is not None:
@@ -781,7 +819,7 @@ def _step(film, kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     taking its share of the tile's pixels; their results are then added to the film (replicated
     accumulators), which gathers them from the devices.
     """
-    splats = _splats_only(kernel.integrator)
+    splats = _splats_only(kernel.integrator) or _bidirectional(kernel.integrator)
     trace = jax.shard_map(
         functools.partial(_trace, cfg=cfg),
         mesh=Mesh(np.asarray(cfg.devices), ("pixels",)),

@@ -16,7 +16,7 @@ from ..camera import (
     ThinLensCamera,
 )
 from ._accelerators import ACCELERATORS
-from ._integrators import Direct, Path, PTracer, VolPath
+from ._integrators import BDPT, Direct, Path, PTracer, VolPath
 from ._lights import (
     AreaLight,
     ConstantLight,
@@ -26,9 +26,11 @@ from ._lights import (
     SpotLight,
 )
 from ._materials import (
+    BlendBSDF,
     Conductor,
     Dielectric,
     Diffuse,
+    Mask,
     OrenNayar,
     Plastic,
     RoughConductor,
@@ -62,14 +64,14 @@ def _by_name(*plugins) -> dict:
 # Mitsuba 3's `<bsdf type=...>` names.
 MATERIALS = _by_name(
     Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null,
-    Plastic, RoughPlastic, ThinDielectric,
+    Plastic, RoughPlastic, ThinDielectric, BlendBSDF, Mask,
 )  # fmt: skip
 # Mitsuba 3's `<emitter type=...>` names.
 LIGHTS = _by_name(
     AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvironmentLight
 )
 # Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
-INTEGRATORS = _by_name(Path, Direct, VolPath, PTracer)
+INTEGRATORS = _by_name(Path, Direct, VolPath, PTracer, BDPT)
 # Mitsuba 3's `<medium type=...>` names.
 MEDIA = _by_name(HomogeneousMediumPlugin, GridMediumPlugin)
 # `radiometria render --sampler`.

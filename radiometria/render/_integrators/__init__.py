@@ -5,6 +5,11 @@ use are in `radiometria.render._registry.INTEGRATORS`.
 """
 
 from ._base import AbstractIntegrator as AbstractIntegrator
+from ._bdpt import (
+    BDPT as BDPT,
+    bdpt_mis_weight as bdpt_mis_weight,
+    bdpt_sample_dimensions as bdpt_sample_dimensions,
+)
 from ._direct import Direct as Direct
 from ._path import (
     Path as Path,

@@ -221,4 +221,20 @@ class AreaLight(AbstractLight):
             pdf_dir=pdf_dir,
             le_observer=jnp.where(facing[:, None], le, 0.0),
             delta_pos=jnp.zeros(pdf_dir.shape, bool),
+            pdf_dir_observer=jnp.where(
+                facing,
+                jnp.abs(cos_obs)
+                / (jnp.pi * jnp.sqrt(jnp.maximum(dot(to_obs, to_obs), jnp.finfo(dtype).tiny)))
+                * jnp.where(two_sided, 0.5, 1.0),
+                0.0,
+            ),
         )
+
+    def pdf_le(self, face, cos_o):
+        """Position density `light_pdf_area` of `face` and the cosine-weighted direction
+        density $|\\cos| / \\pi$ (halved for two-sided emitters; 0 on the dark side)."""
+        emitter = self.face_emitter[face]
+        two_sided = self.two_sided[jnp.maximum(emitter, 0)]
+        on = (emitter >= 0) & ((cos_o > 0) | (two_sided & (cos_o != 0)))
+        pdf_dir = jnp.abs(cos_o) / jnp.pi * jnp.where(two_sided, 0.5, 1.0)
+        return jnp.where(on, self.light_pdf_area[face], 0.0), jnp.where(on, pdf_dir, 0.0)

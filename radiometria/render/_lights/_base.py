@@ -5,6 +5,7 @@ import abc
 from typing import ClassVar
 
 import equinox as eqx
+import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 __all__ = ["AbstractLight", "EmissionSample", "LightSample"]
@@ -58,6 +59,10 @@ class EmissionSample(eqx.Module):
     - `delta_pos`: `(n,)` bool: `p` is a delta position (point, spot), so no cosine factor
         at the light and no surface to hit.
 
+    - `pdf_dir_observer`: the solid-angle density with which `sample_le` would have emitted
+        the direction from `p` towards `observer` `(n,)` (0 outside the emission; for
+        bidirectional path tracing's MIS weights). [sr^-1]
+
     The light path's initial throughput is `le |n . d| / (pdf_pos pdf_dir)` (no cosine for
     `delta_pos`), and 0 marks a failed sample (`pdf_pos = 0`).
 
@@ -73,6 +78,7 @@ class EmissionSample(eqx.Module):
     pdf_dir: Float[Array, " n"]
     le_observer: Float[Array, "n k"]
     delta_pos: Bool[Array, " n"]
+    pdf_dir_observer: Float[Array, " n"] | None = None
 
 
 class AbstractLight(eqx.Module):
@@ -165,6 +171,18 @@ class AbstractLight(eqx.Module):
             f"the {getattr(self, 'NAME', type(self).__name__)!r} light cannot start light "
             "paths yet (light tracing supports the 'area', 'point' and 'spot' emitters)."
         )
+
+    def pdf_le(
+        self, face: Int[Array, " n"], cos_o: Float[Array, " n"]
+    ) -> tuple[Float[Array, " n"], Float[Array, " n"]]:
+        """The densities with which `sample_le` would start a light path at a point of the
+        emissive triangle `face` and leave it in a direction at cosine `cos_o` to the
+        triangle's normal (pbrt's `PdfLe`): `(pdf_pos, pdf_dir)`, the position's density per
+        unit area with the light's pick probability included [m^-2] and the direction's per
+        unit solid angle [sr^-1]; 0 where no light of this plugin lies there (the default:
+        lights without surfaces)."""
+        zero = jnp.zeros(face.shape, cos_o.dtype)
+        return zero, zero
 
     @abc.abstractmethod
     def power(self, scene_radius: float) -> float:

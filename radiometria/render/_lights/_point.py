@@ -103,4 +103,5 @@ class PointLight(AbstractDeltaLight):
             pdf_dir=jnp.full(prob.shape, 1.0 / (4.0 * jnp.pi), dtype),
             le_observer=le,
             delta_pos=jnp.ones(prob.shape, bool),
+            pdf_dir_observer=jnp.full(prob.shape, 1.0 / (4.0 * jnp.pi), dtype),
         )

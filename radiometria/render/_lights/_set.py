@@ -138,6 +138,14 @@ class LightSet(AbstractLight):
             )
         return eqx.tree_at(lambda e: e.pdf_pos, out, out.pdf_pos * prob)
 
+    def pdf_le(self, face, cos_o):
+        """The area plugin's `pdf_le`, its position density times its pick probability."""
+        if self.area_index < 0:
+            return super().pdf_le(face, cos_o)
+        i = self.area_index
+        pdf_pos, pdf_dir = self.lights[i].pdf_le(face, cos_o)
+        return self.prob[i] * pdf_pos, pdf_dir
+
     def pdf_li(self, face, dist, cos_light):
         if self.area_index < 0:
             return jnp.zeros(face.shape, dist.dtype)

@@ -173,4 +173,7 @@ class SpotLight(AbstractDeltaLight):
             pdf_dir=1.0 / (2.0 * jnp.pi * (1.0 - cos_max)),
             le_observer=intensity * self._falloff(j, to_obs)[:, None],
             delta_pos=jnp.ones(prob.shape, bool),
+            pdf_dir_observer=jnp.where(
+                self._falloff(j, to_obs) > 0, 1.0 / (2.0 * jnp.pi * (1.0 - cos_max)), 0.0
+            ),
         )
