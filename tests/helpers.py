@@ -1,12 +1,14 @@
 """Shared test helpers: tree comparison, convergence slopes, per-dtype tolerances, byte
 mutations of files for the fuzz tests."""
 
+import os
 import re
 import struct
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from hypothesis import HealthCheck, settings
 
 
 def tree_allclose(a, b, *, rtol: float = 1e-10, atol: float = 0.0) -> bool:
@@ -76,3 +78,18 @@ def garble_bytes(data: bytes, edits) -> bytes:
         elif kind == "int32":
             data = data[:i] + struct.pack("<i", number[0]) + data[i + 4 :]
     return data
+
+
+def fuzz_settings(examples: int):
+    """Hypothesis settings of the file readers' fuzz tests: `examples` cases in CI, or
+    `RADIOMETRIA_FUZZ_EXAMPLES` for a longer run (`pytest -m fuzz`); no deadline (file IO
+    times vary) and no health checks on slow or large inputs or function-scoped fixtures."""
+    return settings(
+        max_examples=int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", str(examples))),
+        deadline=None,
+        suppress_health_check=[
+            HealthCheck.too_slow,
+            HealthCheck.data_too_large,
+            HealthCheck.function_scoped_fixture,
+        ],
+    )

@@ -6,7 +6,6 @@ The valid files are written with the OpenEXR binding directly, not with `write_e
 `RADIOMETRIA_FUZZ_EXAMPLES=5000 pytest -m fuzz` runs a longer search.
 """
 
-import os
 import re
 import struct
 import time
@@ -14,11 +13,11 @@ import time
 import numpy as np
 import OpenEXR
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import given, strategies as st
 
 from radiometria.camera import read_exr, read_spectral_exr
 
-from ..helpers import garble_bytes
+from ..helpers import fuzz_settings, garble_bytes
 
 RGB = np.random.default_rng(3).random((8, 8, 3)).astype(np.float32)
 
@@ -108,12 +107,7 @@ def test_read_spectral_exr_refuses_missing_and_integer_bands(tmp_path):
 
 # -- fuzzing ---------------------------------------------------------------------------------
 
-EXAMPLES = int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", "40"))
-FUZZ = settings(
-    max_examples=EXAMPLES,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
+FUZZ = fuzz_settings(40)
 
 
 @pytest.mark.fuzz

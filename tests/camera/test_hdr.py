@@ -5,19 +5,18 @@ orientations), and on hostile files (names the file; absurd sizes refused before
 `RADIOMETRIA_FUZZ_EXAMPLES=5000 pytest -m fuzz` runs a longer search.
 """
 
-import os
 import time
 
 import mitsuba as mi
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import given, strategies as st
 
 from radiometria.camera import read_hdr
 from radiometria.render._lights import read_envmap
 from radiometria.render._textures import read_texture_image
 
-from ..helpers import garble_bytes
+from ..helpers import fuzz_settings, garble_bytes
 
 mi.set_variant("scalar_rgb")
 
@@ -126,15 +125,8 @@ def test_hostile_hdr_files_name_the_file_and_the_problem(tmp_path):
         read_hdr(tmp_path / "missing.hdr")
 
 
-EXAMPLES = int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", "40"))
-
-
 @pytest.mark.fuzz
-@settings(
-    max_examples=EXAMPLES,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-)
+@fuzz_settings(40)
 @given(
     edits=st.lists(
         st.tuples(

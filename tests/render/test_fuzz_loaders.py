@@ -8,25 +8,20 @@ number of examples; `RADIOMETRIA_FUZZ_EXAMPLES=5000 pytest -m fuzz` runs a longe
 """
 
 import json
-import os
 import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import given, strategies as st
 
 import radiometria.render as rr
 from radiometria.render import SceneError, load_scene
 
+from ..helpers import fuzz_settings
 from .test_loaders import SCENE, TET
 
-EXAMPLES = int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", "60"))
-FUZZ = settings(
-    max_examples=EXAMPLES,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
+FUZZ = fuzz_settings(60)
 pytestmark = pytest.mark.fuzz
 
 # Values that stress the parsers: numbers out of range, non-numbers, references, names.

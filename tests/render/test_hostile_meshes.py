@@ -6,7 +6,6 @@ CI runs a bounded number of fuzz examples; `RADIOMETRIA_FUZZ_EXAMPLES=5000 pytes
 runs a longer search.
 """
 
-import os
 import re
 import struct
 import time
@@ -14,11 +13,11 @@ import time
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import given, strategies as st
 
 from radiometria.render import SceneError, load_mesh, load_scene
 
-from ..helpers import mutate_bytes
+from ..helpers import fuzz_settings, mutate_bytes
 
 TET = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
 TET_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
@@ -124,12 +123,7 @@ def test_degenerate_triangle_on_an_emitter_is_refused(tmp_path):
 
 # -- fuzzing ---------------------------------------------------------------------------------
 
-EXAMPLES = int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", "40"))
-FUZZ = settings(
-    max_examples=EXAMPLES,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
+FUZZ = fuzz_settings(40)
 TOKENS = [b"0", b"-1", b"9", b"-9", b"nan", b"inf", b"1e999", b"x", b"", b"\xff\xfe", b"\x00",
           b"f", b"v", b"4294967295", b"-2147483648", b"1/2/3", b"\n", b"end_header\n",
           b"element vertex 99999999999\n", b"property list uint int vertex_indices\n",

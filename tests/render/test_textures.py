@@ -9,7 +9,6 @@ CI runs a bounded number of fuzz examples; `RADIOMETRIA_FUZZ_EXAMPLES=5000 pytes
 runs a longer search.
 """
 
-import os
 import struct
 import time
 import zlib
@@ -17,7 +16,7 @@ import zlib
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import given, strategies as st
 from PIL import Image
 
 from radiometria.render import RenderScene, SceneError, load_scene
@@ -35,7 +34,7 @@ from radiometria.render._textures import (
 )
 from radiometria.upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum, get_lut
 
-from ..helpers import mutate_bytes
+from ..helpers import fuzz_settings, mutate_bytes
 
 GREYS = np.array([[0.1, 0.3], [0.5, 0.9]])  # row 0 is the top of the image
 
@@ -337,7 +336,6 @@ def test_texture_where_none_is_supported_is_named(tmp_path):
         load_scene(tmp_path / "scene.xml")
 
 
-EXAMPLES = int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", "30"))
 BYTE_MUTATION = st.tuples(
     st.sampled_from(["delete", "insert", "flip", "truncate"]),
     st.integers(min_value=0, max_value=10**6),
@@ -362,11 +360,7 @@ SOURCES = _sources()
 
 
 @pytest.mark.fuzz
-@settings(
-    max_examples=EXAMPLES,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-)
+@fuzz_settings(30)
 @given(
     source=st.sampled_from(sorted(SOURCES)),
     mutations=st.lists(BYTE_MUTATION, min_size=1, max_size=4),

@@ -8,18 +8,17 @@ The hostile archives are built with `zipfile` and `numpy.lib.format` directly (i
 
 import io
 import json
-import os
 import re
 import time
 import zipfile
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import given, strategies as st
 
 import radiometria.upsampling as up
 
-from ..helpers import garble_bytes
+from ..helpers import fuzz_settings, garble_bytes
 
 RES = 3
 SCALE = np.linspace(0.0, 1.0, RES).astype(np.float32)
@@ -185,12 +184,7 @@ def test_load_lut_reads_the_valid_source(tmp_path):
 
 # -- fuzzing ---------------------------------------------------------------------------------
 
-EXAMPLES = int(os.environ.get("RADIOMETRIA_FUZZ_EXAMPLES", "40"))
-FUZZ = settings(
-    max_examples=EXAMPLES,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-)
+FUZZ = fuzz_settings(40)
 ARRAYS = st.one_of(
     st.sampled_from([SCALE, COEFFS, np.zeros(0), np.array("x"), np.array([np.nan]), COEFFS[:1]]),
     st.builds(
