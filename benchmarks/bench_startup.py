@@ -14,7 +14,9 @@ Cornell box at its own 256 x 256 film (Mitsuba 3's `cornell_box()`; radiometria'
    (second run); Mitsuba's LLVM kernels are likewise cached by Dr.Jit after its first run.
 2. **Start-up** (goal 2): seconds from starting the command to its first render step running
    (the step compiled or loaded from the cache and dispatched), cold and warm, and what
-   `radiometria render --help` costs.
+   `radiometria render --help` costs. The warm runs also print where the time went, from
+   the command's own timestamps (`RADIOMETRIA_TIMING=1`): imports, scene compile, the first
+   step's trace + lowering and its load from the cache.
 3. **Warm process** (goal 3): `bench_render.py`'s in-process time to equal error, radiometria
    (Owen-Sobol) against `llvm_ad_spectral`.
 4. **Memory** (goal 5): peak resident memory (`ru_maxrss` of the child, as
@@ -106,13 +108,41 @@ def _first_step(err: str) -> float | None:
     return float(found[-1]) if found else None
 
 
+_MARK = re.compile(r"radiometria timing: +([0-9.]+) s +\+ *([0-9.]+) s +(.*)")
+
+
+def _phases(err: str) -> dict[str, float]:
+    """Seconds since the process started at the end of each start-up phase, from the
+    command's `RADIOMETRIA_TIMING` lines: imports, scene compiled, step lowered (its trace and
+    lowering done), step loaded (from the cache) or compiled, first step dispatched."""
+    out: dict[str, float] = {}
+    for line in err.replace("\r", "\n").splitlines():
+        m = _MARK.search(line)
+        if not m:
+            continue
+        t, label = float(m[1]), m[3]
+        if label.startswith("imports"):
+            out["imports"] = t
+        elif label.startswith("scene compiled"):
+            out["scene compiled"] = t
+        elif "lowered jit(_step)" in label:
+            out.setdefault("step traced+lowered", t)
+        elif "compiled jit(_step)" in label:  # after a cache load or an XLA compile
+            out.setdefault("step loaded/compiled", t)
+    first = _first_step(err)
+    if first is not None:
+        out["first step dispatched"] = first
+    return out
+
+
 def _ours(spp, seed, work: Path, cache: Path, extra=()):
     out = work / f"ours_{spp}_{seed}.exr"
     argv = [PYTHON, "-c", _OURS, "render", "cornell-box", "--spp", str(spp)]
     argv += ["--seed", str(seed), "--out", str(out), *extra]
-    t, rss, err = _run(argv, {"XDG_CACHE_HOME": str(cache)})
+    t, rss, err = _run(argv, {"XDG_CACHE_HOME": str(cache), "RADIOMETRIA_TIMING": "1"})
     from radiometria.camera import read_exr
 
+    _ours.phases = _phases(err)
     return t, rss, _first_step(err), np.asarray(read_exr(out)[0], np.float64)
 
 
@@ -174,9 +204,11 @@ def main(argv=None) -> int:
             t, rss, first, img = _ours(spp, 100 + spp, work, warm)
             rows.setdefault("radiometria second run", []).append((spp, t, rel_mse(img, reference)))
             record.setdefault("first_step_warm", []).append(first)
+            record.setdefault("phases_warm", []).append(_ours.phases)
             print(f"radiometria warm  spp {spp:4d} {t:7.2f} s  first step {first:5.2f} s "
                   f"rss {rss:6.0f} MiB  relMSE {rows['radiometria second run'][-1][2]:.3e}",
                   flush=True)  # fmt: skip
+            print("    " + ", ".join(f"{k} {v:.2f} s" for k, v in _ours.phases.items()))
         variants = ["scalar_spectral"] + (["llvm_ad_spectral"] if llvm else [])
         for variant in variants:
             if variant == "llvm_ad_spectral":  # Dr.Jit compiles and caches its kernels once
@@ -234,6 +266,12 @@ def main(argv=None) -> int:
         f"  2  first step, warm cache / 1.5 s: {first_warm / 1.5:5.2f}  ({first_warm:.2f} s; "
         f"cold {max(record['first_step_cold']):.2f} s; `render --help` {help_s:.2f} s)"
     )
+    # Where the warm start-up goes: each phase's share, from the fastest warm run.
+    phases = min(record["phases_warm"], key=lambda p: p.get("first step dispatched", 1e9))
+    previous = 0.0
+    for name, t in phases.items():
+        print(f"       {name:24s} at {t:5.2f} s  (+{t - previous:.2f} s)")
+        previous = t
     if "warm_in_process" in record and record["warm_in_process"]:
         print(f"  3  warm process vs llvm_ad_spectral: {record['warm_in_process']:5.2f}")
     mem = max([*hd.values(), record.get("rss_demo_mib", 0)])

@@ -21,6 +21,7 @@ from radiometria.render._cache import (
     compilation_cache_disabled,
     compilation_cache_info,
     enable_compilation_cache,
+    jax_activity,
 )
 
 # A render through the command's `main`, counting JAX's persistent-cache events.
@@ -129,3 +130,28 @@ def test_second_render_process_loads_every_program_from_the_cache(tmp_path):
     assert second["status"] == 0
     assert second["misses"] == 0 and second["hits"] >= 1
     assert compilation_cache_info(cache).entries == stored
+
+
+def test_jax_activity_counts_traces_and_compiles(monkeypatch, capsys):
+    """`RADIOMETRIA_TIMING`'s JAX summary: a new jitted function is traced, lowered and
+    compiled once (whether XLA compiles it or the cache has it), a second call adds nothing;
+    events of 50 ms or more are marked as they end."""
+    monkeypatch.setenv("RADIOMETRIA_TIMING", "1")
+    jax_activity.start()
+    jax_activity.start()  # registered once
+    x = jnp.ones(7).block_until_ready()
+    jax_activity.summary()  # drop what came before
+
+    @jax.jit
+    def fresh(x):
+        return jnp.sin(x) * 3.0 + jnp.arange(7.0)
+
+    fresh(x).block_until_ready()
+    summary = jax_activity.summary()
+    for kind in ("1 traced", "1 lowered", "1 compiled"):
+        assert kind in summary, summary
+    fresh(x).block_until_ready()
+    assert jax_activity.summary() == ""
+    monkeypatch.setattr(type(jax_activity), "loud_s", 0.0)
+    jax.jit(lambda y: y - 1.0)(x).block_until_ready()
+    assert "jax: traced" in capsys.readouterr().err
