@@ -217,3 +217,71 @@ def test_a_denser_chromatic_medium_fails_its_image_mean_test(media_scene):
         "chromatic medium behind glass": False,
         "envmap cloud": True,
     }
+
+
+BACKDROP_SCENE = """<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="45"/>
+    <transform name="to_world"><lookat origin="0, 0.5, 4" target="0, -0.5, 0" up="0, 1, 0"/>
+    </transform>
+    <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <integrator type="volpath"><integer name="max_depth" value="2"/></integrator>
+  <emitter type="constant"><rgb name="radiance" value="1, 1, 1"/></emitter>
+  <shape type="obj"><string name="filename" value="{obj}"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+</scene>
+"""
+# An L-shaped backdrop (floor and back wall sharing an edge) as an OBJ file without normals:
+# Mitsuba 3 gives such a mesh smoothed vertex normals, which tilt the shading frame of both
+# faces near the shared edge (a stand-in for the backdrop of Mitsuba's participating_media
+# test scenes, which `volpath` rendered ~20 % darker than Mitsuba before issue 13's fix).
+BACKDROP_V = [(-4, -1, 4), (4, -1, 4), (4, -1, -2), (-4, -1, -2), (-4, 5, -2), (4, 5, -2)]
+BACKDROP_F = [(0, 1, 2), (0, 2, 3), (3, 2, 5), (3, 5, 4)]
+
+
+def _backdrop(tmp_path, *, shared: bool):
+    """The scene file; `shared=False` splits the vertices (flat normals, a different scene)."""
+    if shared:
+        verts, faces = BACKDROP_V, BACKDROP_F
+    else:
+        verts = [BACKDROP_V[i] for f in BACKDROP_F for i in f]
+        faces = [(3 * k, 3 * k + 1, 3 * k + 2) for k in range(len(BACKDROP_F))]
+    obj = tmp_path / f"backdrop_{shared}.obj"
+    lines = [f"v {x} {y} {z}" for x, y, z in verts]
+    obj.write_text("\n".join(lines + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]) + "\n")
+    path = tmp_path / f"backdrop_{shared}.xml"
+    path.write_text(BACKDROP_SCENE.format(obj=obj))
+    return path
+
+
+@pytest.fixture(scope="module")
+def backdrop(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("backdrop")
+    mean, var = mitsuba_moments(_backdrop(tmp, shared=True), REF_SPP, seed=1)
+    return tmp, mean, var
+
+
+def _backdrop_z_test(path, mean, var):
+    img = np.asarray(render(path, spp=SPP, seed=0, return_xyz=True, progress=False), np.float64)
+    n = mean.shape[0] * mean.shape[1]
+    se = np.sqrt(var.sum(axis=(0, 1)) / n**2 * (1 / SPP + 1 / REF_SPP))
+    mean_ok = bool(np.all(np.abs((img - mean).mean(axis=(0, 1))) < 4 * se))
+    return pixel_z_test(img, mean, var, SPP, REF_SPP), mean_ok
+
+
+def test_smooth_normals_backdrop_passes_the_z_test_against_mitsuba(backdrop):
+    """Regression of issue 13 (a): the shading frame of `volpath` at surfaces."""
+    tmp, mean, var = backdrop
+    result, mean_ok = _backdrop_z_test(_backdrop(tmp, shared=True), mean, var)
+    assert result.passed, result.message
+    assert mean_ok
+
+
+def test_flat_backdrop_fails_the_smooth_backdrops_z_test(backdrop):
+    """The test can fail: the same backdrop with flat normals (split vertices) is not the
+    scene Mitsuba rendered, and the z-test sees it."""
+    tmp, mean, var = backdrop
+    result, mean_ok = _backdrop_z_test(_backdrop(tmp, shared=False), mean, var)
+    assert not (result.passed and mean_ok)

@@ -167,6 +167,7 @@ class _Walk(eqx.Module):
     surface: Array  # the walk ended on a non-null surface
     cos_o: Array
     uv: Array  # (n, 2) surface coordinates of the surface hit (textures)
+    ns: Array  # (n, 3) shading normal of the surface hit (`_vertex`), for the BSDF frame
 
 
 def _bounded_loop(body, init, n: int, differentiable: bool, pending):
@@ -209,6 +210,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         surface=jnp.zeros((n,), bool),
         cos_o=jnp.zeros((n,), dtype),
         uv=jnp.zeros((n, 2), dtype),
+        ns=jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3)),
     )
     d = state.d
 
@@ -261,6 +263,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
             surface=jnp.where(ended, hit & ~null_hit, w.surface),
             cos_o=jnp.where(ended, v.cos_o, w.cos_o),
             uv=jnp.where(ended[:, None], v.uv, w.uv),
+            ns=jnp.where(ended[:, None], v.ns, w.ns),
         )
 
     return _bounded_loop(body, walk, max_null, differentiable, lambda w: w.pending)
@@ -312,8 +315,12 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     material = scene.face_material[face]
     two_sided = scene.materials.two_sided[material]
     transmissive = scene.materials.transmissive[material]
+    # The BSDF frame is the shading normal (as in `path_radiance`: Mitsuba's smoothed vertex
+    # normals, also for meshes whose file has none); which side was hit, offsets and medium
+    # changes follow the geometric normal `ng`.
     front = walk.cos_o > 0
-    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -ng, ng)
+    ns = jnp.where(walk.event[:, None], ng, walk.ns)  # medium vertices: any frame
+    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -ns, ns)
     alive = state.alive & (walk.event | (walk.surface & (front | two_sided | transmissive)))
     s, t = coordinate_system(n)
 
