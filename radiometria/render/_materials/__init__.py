@@ -7,6 +7,7 @@ are in `radiometria.render._registry.MATERIALS`.
 """
 
 from ._base import AbstractMaterial as AbstractMaterial, ScaledBxDF as ScaledBxDF
+from ._composite import BlendBSDF as BlendBSDF, Mask as Mask
 from ._conductor import Conductor as Conductor
 from ._dielectric import Dielectric as Dielectric
 from ._diffuse import Diffuse as Diffuse

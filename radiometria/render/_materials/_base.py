@@ -20,9 +20,10 @@ from .._textures import AbstractTexture, TextureSpec, concatenate_textures
 
 __all__ = ["AbstractMaterial", "Properties"]
 
-Properties = dict[str, "SpectralValue | TextureSpec | str | bool | int"]
+Properties = dict[str, "SpectralValue | TextureSpec | str | bool | int | AbstractMaterial"]
 """A plugin's parameters as a scene file gives them: name -> number, string, `LinearRGB`
-triple, spectrum or texture (Mitsuba 3's `Properties`)."""
+triple, spectrum, texture, or a nested material plugin (`blendbsdf`, `mask`) (Mitsuba 3's
+`Properties`)."""
 
 
 class AbstractMaterial(eqx.Module):
@@ -77,6 +78,12 @@ class AbstractMaterial(eqx.Module):
         """Number of materials (rows) held."""
         return int(self.two_sided.shape[0])
 
+    @property
+    def transmissive_rows(self) -> Bool[Array, " m"]:
+        """`(m,)` bool, rows that transmit (`TRANSMISSIVE` for every row, unless a plugin
+        such as a blend of materials decides per row)."""
+        return jnp.full(self.two_sided.shape, self.TRANSMISSIVE, bool)
+
 
 def concatenate(materials: "list[AbstractMaterial]") -> AbstractMaterial:
     """Materials of one kind as one plugin, their rows in order."""
@@ -85,6 +92,9 @@ def concatenate(materials: "list[AbstractMaterial]") -> AbstractMaterial:
         raise TypeError(f"can only concatenate materials of one kind, got {kinds}.")
     if len(materials) == 1:
         return materials[0]
+    kind = kinds.pop()
+    if hasattr(kind, "concatenate_rows"):  # composite materials join their nested sets
+        return kind.concatenate_rows(materials)
 
     def join(*xs):
         if isinstance(xs[0], AbstractTexture):  # textures of different kinds: a stack

@@ -58,7 +58,7 @@ class MaterialSet(eqx.Module):
             groups[kind].append(m)
             plugin_of += [kinds.index(kind)] * m.n_rows
             row_of += list(range(first, first + m.n_rows))
-            transmissive += [kind.TRANSMISSIVE] * m.n_rows
+            transmissive += np.asarray(m.transmissive_rows, bool).tolist()
         plugins = tuple(concatenate(groups[k]) for k in kinds)
         two_sided = jnp.concatenate([jnp.asarray(m.two_sided, bool) for m in materials])
         return cls(
@@ -69,6 +69,41 @@ class MaterialSet(eqx.Module):
             transmissive=jnp.asarray(transmissive, bool),
             identity_rows=len(plugins) == 1 and bool(np.all(np.diff(row_of) == 1)),
         )
+
+    @classmethod
+    def join(cls, sets: "list[MaterialSet]") -> "tuple[MaterialSet, list[int]]":
+        """The materials of several sets as one set, in order, and the index of each set's
+        first material in it (NumPy work, outside `jit`): plugins of one kind are
+        concatenated, and each material keeps its plugin's row, shifted past the rows of
+        that kind in the sets before it."""
+        kinds: list[type] = []
+        groups: dict[type, list[AbstractMaterial]] = {}
+        plugin_of, row_of, offsets, first = [], [], [], 0
+        for s in sets:
+            offsets.append(first)
+            first += s.n_materials
+            shift = {}
+            for p in s.plugins:
+                kind = type(p)
+                if kind not in groups:
+                    kinds.append(kind)
+                    groups[kind] = []
+                shift[kind] = sum(g.n_rows for g in groups[kind])
+                groups[kind].append(p)
+            for j, r in zip(np.asarray(s.plugin_of), np.asarray(s.row_of), strict=True):
+                kind = type(s.plugins[int(j)])
+                plugin_of.append(kinds.index(kind))
+                row_of.append(int(r) + shift[kind])
+        return cls(
+            plugins=tuple(concatenate(groups[k]) for k in kinds),
+            plugin_of=jnp.asarray(plugin_of, jnp.int32),
+            row_of=jnp.asarray(row_of, jnp.int32),
+            two_sided=jnp.concatenate([s.two_sided for s in sets]),
+            transmissive=jnp.concatenate([s.transmissive for s in sets]),
+            identity_rows=len(kinds) == 1
+            and row_of[:1] == [0]
+            and bool(np.all(np.diff(row_of) == 1)),
+        ), offsets
 
     @property
     def n_materials(self) -> int:

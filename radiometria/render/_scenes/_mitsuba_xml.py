@@ -513,8 +513,15 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
             return len(materials) - 1
         idx = _bsdf(ctx, inner[0], materials, name)
         m = materials[idx]
+        if m.type in _COMPOSITE:  # Mitsuba's twosided nests no transmitting BSDF
+            try:
+                MATERIALS[m.type].from_properties(m.params, two_sided=True, where="twosided")
+            except ValueError as e:
+                raise ctx.err(node, str(e).removeprefix("twosided: ")) from None
         materials[idx] = Material(m.type, m.params, two_sided=True, name=name)
         return idx
+    if kind in _COMPOSITE:
+        return _composite_bsdf(ctx, node, materials, kind, name)
     if kind not in MATERIALS:
         raise ctx.err(
             node, f"unsupported BSDF type '{kind}' (line {node.line}); supported: "
@@ -525,6 +532,54 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
     params.update(texture_ref_properties(ctx, node, _ref))  # <ref name=... id=texture>
     if kind == "diffuse" and "reflectance" not in params:
         params["reflectance"] = 0.5
+    materials.append(Material(kind, params, two_sided=False, name=name))
+    return len(materials) - 1
+
+
+_COMPOSITE = {"blendbsdf": 2, "mask": 1}  # BSDFs with nested BSDFs: how many
+
+
+def _composite_bsdf(ctx: _Ctx, node: _Node, materials: list, kind: str, name: str) -> int:
+    """`blendbsdf` (two nested BSDFs, `weight`) or `mask` (one nested BSDF, `opacity`): the
+    nested BSDFs (inline, or `<ref id>` to a BSDF) become plugins now, passed to the composite
+    plugin as `bsdf_0`, `bsdf_1` (`radiometria.render._materials._composite`)."""
+    _only_children(ctx, node, {"bsdf", "ref"})
+    cls = MATERIALS[kind]
+    scalar_names = set(cls.PARAMETERS) - {"bsdf_0", "bsdf_1"}
+    params = _properties(ctx, node, scalar_names)
+    nested = []
+    for ch in node.children:
+        if ch.tag == "bsdf":
+            idx = _bsdf(ctx, ch, materials)
+            if idx != len(materials) - 1:  # pragma: no cover - _bsdf appends inline BSDFs
+                raise ctx.err(ch, "internal error: a nested BSDF was not the last one parsed")
+            nested.append((ch, materials.pop()))
+        elif ch.tag == "ref":
+            rid = ctx.attr(ch, "id")
+            target = ctx.refs.get(rid, (None, None))[0]
+            if target is not None and target.tag == "bsdf":
+                nested.append((ch, materials[_ref(ctx, ch, "bsdf")]))
+            else:  # a texture parameter (weight, opacity)
+                one = dataclasses.replace(node, children=[ch])
+                params.update(texture_ref_properties(ctx, one, _ref))
+    if len(nested) != _COMPOSITE[kind]:
+        raise ctx.err(node, f"a '{kind}' BSDF needs {_COMPOSITE[kind]} nested <bsdf> or <ref> "
+                      f"(line {node.line}), got {len(nested)}")  # fmt: skip
+    for i, (ch, m) in enumerate(nested):
+        if m.type not in MATERIALS:
+            raise ctx.err(ch, f"unsupported BSDF type '{m.type}' nested in '{kind}'")
+        where = f"{ch.file or ctx.file}:{ch.line}: nested BSDF {m.name!r}"
+        try:
+            params[f"bsdf_{i}"] = MATERIALS[m.type].from_properties(
+                m.params, two_sided=m.two_sided, where=where
+            )
+        except (ValueError, TypeError) as e:
+            raise ctx.err(ch, str(e)) from None
+    where = f"{node.file or ctx.file}:{node.line}: <bsdf type='{kind}'>"
+    try:  # check the parameters now, with the line (the scene compiles it again)
+        cls.from_properties(params, where=where)
+    except (ValueError, TypeError) as e:
+        raise ctx.err(node, str(e).removeprefix(where + ": ")) from None
     materials.append(Material(kind, params, two_sided=False, name=name))
     return len(materials) - 1
 

@@ -24,7 +24,9 @@ from ._description import check_spectral_values
 __all__ = ["TEXTURED_PARAMETERS", "texture_property", "texture_ref_properties", "texture_spec"]
 
 # (plugin type, parameter) pairs whose value may be a texture.
-TEXTURED_PARAMETERS = frozenset({("diffuse", "reflectance")})
+TEXTURED_PARAMETERS = frozenset(
+    {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity")}
+)
 
 _TEXTURE_PARAMETERS = {
     "bitmap": {"filename", "filter_type", "wrap_mode", "raw", "to_uv"},
