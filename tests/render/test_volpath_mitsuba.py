@@ -6,8 +6,8 @@ area light behind it. Our `.vol` files are written by `write_vol` and read by bo
 - A heterogeneous medium of constant density must render what Mitsuba's *homogeneous* medium
   renders (Mitsuba's own heterogeneous medium has an open bug here, so the reference is its
   homogeneous one).
-- A varying (ramp) grid against Mitsuba's `heterogeneous` medium reading the same file; the
-  same with an RGB (spectrally varying) extinction is a strict xfail: it does not match yet.
+- A varying (ramp) grid against Mitsuba's `heterogeneous` medium reading the same file, with
+  a 1-channel density and with an RGB (spectrally varying) extinction of one chromaticity.
 - Homogeneous media, three cases side by side in one 40x16 scene (one compile, one Mitsuba
   reference), each judged also by the mean of its own third of the image: (a) an area light
   inside a medium in a `null` cube, (b) a chromatic (RGB sigma_t) medium inside a smooth
@@ -93,17 +93,7 @@ def _z_test(ours, ref):
     return pixel_z_test(img, mean, var, SPP, REF_SPP), mean_ok
 
 
-RGB_XFAIL = pytest.mark.xfail(
-    strict=True,
-    reason="an RGB sigma_t grid renders about 2x brighter than Mitsuba's, whose spectral "
-    "gridvolume does not upsample the interpolated RGB as one unbounded spectrum times the "
-    "density as our plugin assumes; not resolved yet (issue 13)",
-)
-
-
-@pytest.mark.parametrize(
-    "case", ["constant grid", "ramp grid", pytest.param("rgb ramp grid", marks=RGB_XFAIL)]
-)
+@pytest.mark.parametrize("case", ["constant grid", "ramp grid", "rgb ramp grid"])
 def test_grid_media_pass_the_pixel_z_test_against_mitsuba(tmp_path, case):
     ours, ref = _files(tmp_path, case)
     result, mean_ok = _z_test(ours, ref)

@@ -33,8 +33,11 @@ def _factor_sigma_t(vol: dict, where: str) -> tuple[np.ndarray, object]:
     data = np.asarray(vol["data"], np.float64)
     if data.shape[-1] == 1:
         return data[..., 0], 1.0
-    # RGB: Mitsuba upsamples each interpolated RGB as an unbounded spectrum; that equals a
-    # density times one spectrum exactly when every voxel has the same chromaticity.
+    # RGB: Mitsuba (`gridvolume` in spectral variants) stores per voxel m = 2 max(rgb) and the
+    # bounded sigmoid coefficients of rgb / m, and returns the trilinear interpolation of the
+    # corner spectra times the interpolated m. With one chromaticity in every voxel the corner
+    # spectra are equal, and that is density * (the unbounded spectrum of the densest voxel's
+    # RGB `rgb0`), the density being relative to `rgb0` (in [0, 1]).
     k = np.unravel_index(np.argmax(data.sum(-1)), data.shape[:3])
     rgb0 = data[k]
     c = int(np.argmax(rgb0))
@@ -47,7 +50,7 @@ def _factor_sigma_t(vol: dict, where: str) -> tuple[np.ndarray, object]:
             "every voxel (values proportional to one RGB triple); use a 1-channel density "
             "grid with a spectral scale instead."
         )
-    return density, LinearRGB(tuple(float(v) for v in rgb0 / rgb0[c]))
+    return density, LinearRGB(tuple(float(v) for v in rgb0))
 
 
 def _factor_albedo(value, where: str) -> tuple[np.ndarray | None, object]:
