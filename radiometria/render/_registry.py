@@ -27,10 +27,12 @@ from ._lights import (
 )
 from ._materials import (
     BlendBSDF,
+    BumpMap,
     Conductor,
     Dielectric,
     Diffuse,
     Mask,
+    NormalMap,
     OrenNayar,
     Plastic,
     RoughConductor,
@@ -65,6 +67,7 @@ def _by_name(*plugins) -> dict:
 MATERIALS = _by_name(
     Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null,
     Plastic, RoughPlastic, ThinDielectric, BlendBSDF, Mask,
+    BumpMap, NormalMap,
 )  # fmt: skip
 # Mitsuba 3's `<emitter type=...>` names.
 LIGHTS = _by_name(

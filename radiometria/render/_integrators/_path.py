@@ -61,6 +61,7 @@ from jaxtyping import Array, Bool, Float
 from ..._math import dot
 from ...montecarlo import power_heuristic
 from ...scattering import coordinate_system
+from .._materials import HitGeometry
 from .._render_scene import RenderScene
 from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
 
@@ -127,6 +128,24 @@ def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
         length = jnp.sqrt(dot(ns, ns))[:, None]
         ns = jnp.where(length > 0, ns / jnp.where(length > 0, length, 1.0), n)
     return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions), uv=uv, ns=ns)
+
+
+def surface_tangents(scene: RenderScene, face, normal) -> tuple[Array, Array]:
+    """dp/du and dp/dv of the hit triangles `(n, 3)` [scene units per uv unit], as Mitsuba's
+    meshes: from the corners' uv (`RenderScene.face_uv`), or the edges when the mesh has no
+    uv (uv = barycentrics); a triangle with degenerate uv gets a frame around `normal`."""
+    e1, e2 = scene.e1[face], scene.e2[face]
+    if scene.face_uv is None:
+        return e1, e2
+    c = scene.face_uv[face].astype(e1.dtype)
+    d0, d1 = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
+    det = d0[:, 0] * d1[:, 1] - d0[:, 1] * d1[:, 0]
+    ok = (jnp.abs(det) > 1e-12)[:, None]
+    inv = 1.0 / jnp.where(ok[:, 0], det, 1.0)[:, None]
+    dpdu = (d1[:, 1:2] * e1 - d0[:, 1:2] * e2) * inv
+    dpdv = (-d1[:, 0:1] * e1 + d0[:, 0:1] * e2) * inv
+    s, t = coordinate_system(normal)
+    return jnp.where(ok, dpdu, s), jnp.where(ok, dpdv, t)
 
 
 def path_radiance(
@@ -362,9 +381,19 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     # below it means the ray is inside. Which side was hit, and where rays leave from, follow
     # the geometric normal (no light leaks through a surface; Mitsuba and pbrt alike).
     front = v.cos_o > 0
-    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.ns, v.ns)
+    flip = (two_sided & ~front & ~transmissive)[:, None]
+    n = jnp.where(flip, -v.ns, v.ns)
     alive = state.alive & (front | two_sided | transmissive)
-    s, t = coordinate_system(n)
+    geometry = None
+    if scene.materials.needs_geometry:  # normal or bump maps: Mitsuba's frame from dp/du
+        dpdu, dpdv = surface_tangents(scene, v.face, v.n)
+        s = dpdu - n * dot(n, dpdu)[:, None]
+        s_len = jnp.sqrt(dot(s, s))[:, None]
+        s = jnp.where(s_len > 1e-12, s / jnp.where(s_len > 1e-12, s_len, 1.0),
+                      coordinate_system(n)[0])  # fmt: skip
+        t = jnp.cross(n, s)
+    else:
+        s, t = coordinate_system(n)
 
     def to_local(w):
         return jnp.stack([dot(w, s), dot(w, t), dot(w, n)], axis=-1)
@@ -373,7 +402,10 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
         return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
 
     wo_l = to_local(wo)
-    bsdf = scene.materials.bxdf(material, wavelength_nm, v.uv)
+    if geometry is None and scene.materials.needs_geometry:
+        ng = jnp.where(flip, -v.n, v.n)
+        geometry = HitGeometry(to_local(dpdu), to_local(dpdv), to_local(ng))
+    bsdf = scene.materials.bxdf(material, wavelength_nm, v.uv, geometry)
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
 
     # Next-event estimation: a point on a light (e.g. an emissive triangle chosen by power x

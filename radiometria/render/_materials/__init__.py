@@ -13,6 +13,12 @@ from ._dielectric import Dielectric as Dielectric
 from ._diffuse import Diffuse as Diffuse
 from ._ior import MITSUBA_IOR as MITSUBA_IOR
 from ._oren_nayar import OrenNayar as OrenNayar
+from ._perturbed import (
+    BumpMap as BumpMap,
+    HitGeometry as HitGeometry,
+    NormalMap as NormalMap,
+    PerturbedBxDF as PerturbedBxDF,
+)
 from ._plastic import Plastic as Plastic, RoughPlastic as RoughPlastic
 from ._rough_conductor import RoughConductor as RoughConductor
 from ._rough_dielectric import RoughDielectric as RoughDielectric

@@ -57,6 +57,9 @@ class AbstractMaterial(eqx.Module):
     PARAMETERS: ClassVar[frozenset[str]]
     TRANSMISSIVE: ClassVar[bool] = False
     USES_UV: ClassVar[bool] = False  # bxdf(row, wavelength_nm, uv): textured parameters
+    # bxdf(row, wavelength_nm, uv, geometry): the hits' HitGeometry (normal and bump maps, and
+    # the composites that pass it on to their nested materials)
+    USES_GEOMETRY: ClassVar[bool] = False
     two_sided: eqx.AbstractVar[Bool[Array, " m"]]
 
     @classmethod
@@ -77,6 +80,11 @@ class AbstractMaterial(eqx.Module):
     def n_rows(self) -> int:
         """Number of materials (rows) held."""
         return int(self.two_sided.shape[0])
+
+    @property
+    def needs_geometry(self) -> bool:
+        """Whether `bxdf` needs the hits' `HitGeometry` (static: from the plugin's kind)."""
+        return self.USES_GEOMETRY
 
     @property
     def transmissive_rows(self) -> Bool[Array, " m"]:

@@ -120,6 +120,7 @@ class BlendBSDF(AbstractMaterial):
     NAME: ClassVar[str] = "blendbsdf"
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"weight", "bsdf_0", "bsdf_1"})
     USES_UV: ClassVar[bool] = True
+    USES_GEOMETRY: ClassVar[bool] = True  # passed on to the nested materials
     children: MaterialSet
     first: Int[Array, " m"]
     second: Int[Array, " m"]
@@ -162,12 +163,18 @@ class BlendBSDF(AbstractMaterial):
     def transmissive_rows(self) -> Bool[Array, " m"]:
         return self.transmits
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None):
+    @property
+    def needs_geometry(self) -> bool:
+        return self.children.needs_geometry
+
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None, geometry=None
+    ):
         first, second = self.first[row], self.second[row]
         w = jnp.clip(self.weight(row, wavelength_nm, uv)[..., 0], 0.0, 1.0)
         return BlendBxDF(
-            self.children.bxdf(first, wavelength_nm, uv),
-            self.children.bxdf(second, wavelength_nm, uv),
+            self.children.bxdf(first, wavelength_nm, uv, geometry),
+            self.children.bxdf(second, wavelength_nm, uv, geometry),
             w,
             _one_sided(self.children, first),
             _one_sided(self.children, second),
@@ -198,6 +205,7 @@ class Mask(AbstractMaterial):
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"opacity", "bsdf_0"})
     TRANSMISSIVE: ClassVar[bool] = True
     USES_UV: ClassVar[bool] = True
+    USES_GEOMETRY: ClassVar[bool] = True  # passed on to the nested material
     children: MaterialSet
     nested: Int[Array, " m"]
     opacity: AbstractTexture
@@ -228,9 +236,17 @@ class Mask(AbstractMaterial):
             jnp.concatenate([m.two_sided for m in materials]),
         )
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None):
+    @property
+    def needs_geometry(self) -> bool:
+        return self.children.needs_geometry
+
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None, geometry=None
+    ):
         nested = self.nested[row]
         a = jnp.clip(self.opacity(row, wavelength_nm, uv)[..., 0], 0.0, 1.0)
         return MaskBxDF(
-            self.children.bxdf(nested, wavelength_nm, uv), a, _one_sided(self.children, nested)
+            self.children.bxdf(nested, wavelength_nm, uv, geometry),
+            a,
+            _one_sided(self.children, nested),
         )

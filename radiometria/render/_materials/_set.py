@@ -110,13 +110,23 @@ class MaterialSet(eqx.Module):
         """Number of materials `m`."""
         return int(self.plugin_of.shape[0])
 
-    def bxdf(self, material: Int[Array, " n"], wavelength_nm, uv=None) -> AbstractBxDF:
+    @property
+    def needs_geometry(self) -> bool:
+        """Whether some material needs the hits' `HitGeometry` (a normal or bump map; static)."""
+        return any(p.needs_geometry for p in self.plugins)
+
+    def bxdf(
+        self, material: Int[Array, " n"], wavelength_nm, uv=None, geometry=None
+    ) -> AbstractBxDF:
         """The BxDF of each path's material at its wavelengths (`(n,)`, `(n, k)` [nm]) and
         surface coordinates `uv` (`(n, 2)` [1], or `None`: textures are looked up at (0, 0)),
-        which plugins with textured parameters (`USES_UV`) receive."""
+        which plugins with textured parameters (`USES_UV`) receive, and the hits'
+        `HitGeometry` (or `None`), which normal and bump maps need (`USES_GEOMETRY`)."""
         rows = material if self.identity_rows else self.row_of[material]
 
         def one(p):
+            if p.USES_GEOMETRY:
+                return p.bxdf(rows, wavelength_nm, uv, geometry)
             return p.bxdf(rows, wavelength_nm, uv) if p.USES_UV else p.bxdf(rows, wavelength_nm)
 
         if len(self.plugins) == 1:

@@ -536,7 +536,8 @@ def _bsdf(ctx: _Ctx, node: _Node, materials: list, name: str = "") -> int:
     return len(materials) - 1
 
 
-_COMPOSITE = {"blendbsdf": 2, "mask": 1}  # BSDFs with nested BSDFs: how many
+# BSDFs with nested BSDFs: how many
+_COMPOSITE = {"blendbsdf": 2, "mask": 1, "normalmap": 1, "bumpmap": 1}
 
 
 def _composite_bsdf(ctx: _Ctx, node: _Node, materials: list, kind: str, name: str) -> int:
@@ -546,7 +547,16 @@ def _composite_bsdf(ctx: _Ctx, node: _Node, materials: list, kind: str, name: st
     _only_children(ctx, node, {"bsdf", "ref"})
     cls = MATERIALS[kind]
     scalar_names = set(cls.PARAMETERS) - {"bsdf_0", "bsdf_1"}
-    params = _properties(ctx, node, scalar_names)
+    # bumpmap's height texture is a nested <texture> (or <ref id>) without a name
+    unnamed = [c for c in node.children if c.tag == "texture" and "name" not in c.attrib]
+    if unnamed and kind != "bumpmap":
+        raise ctx.err(unnamed[0], f"a <texture> inside '{kind}' needs a 'name'")
+    named = [c for c in node.children if not any(c is u for u in unnamed)]
+    params = _properties(ctx, dataclasses.replace(node, children=named), scalar_names)
+    for ch in unnamed:
+        if "texture" in params:
+            raise ctx.err(ch, "a bumpmap takes one height texture")
+        params["texture"] = texture_spec(ctx, ch, _properties)
     nested = []
     for ch in node.children:
         if ch.tag == "bsdf":
@@ -559,6 +569,8 @@ def _composite_bsdf(ctx: _Ctx, node: _Node, materials: list, kind: str, name: st
             target = ctx.refs.get(rid, (None, None))[0]
             if target is not None and target.tag == "bsdf":
                 nested.append((ch, materials[_ref(ctx, ch, "bsdf")]))
+            elif kind == "bumpmap" and "name" not in ch.attrib:
+                params["texture"] = _ref(ctx, ch, "texture")
             else:  # a texture parameter (weight, opacity)
                 one = dataclasses.replace(node, children=[ch])
                 params.update(texture_ref_properties(ctx, one, _ref))

@@ -25,8 +25,11 @@ __all__ = ["TEXTURED_PARAMETERS", "texture_property", "texture_ref_properties", 
 
 # (plugin type, parameter) pairs whose value may be a texture.
 TEXTURED_PARAMETERS = frozenset(
-    {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity")}
-)
+    {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity"),
+     ("normalmap", "normalmap"), ("bumpmap", "texture")}
+    | {(p, n) for p in ("plastic", "roughplastic")
+       for n in ("diffuse_reflectance", "specular_reflectance")}
+)  # fmt: skip
 
 _TEXTURE_PARAMETERS = {
     "bitmap": {"filename", "filter_type", "wrap_mode", "raw", "to_uv"},
