@@ -23,9 +23,14 @@ and rejects everything else with an error that names the file, the line and the 
 - `transform`: `matrix` (16 values, row-major), `translate`, `rotate` (axis and `angle` in
   degrees), `scale`, `lookat` (`origin`, `target`, `up`), applied in document order.
 - `bsdf`: every plugin of `radiometria.render._registry.MATERIALS` (`diffuse`,
-  `roughdiffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`) with the
-  parameters it declares, and `twosided` (one nested BSDF); an `id` makes it referable by
-  `ref`.
+  `roughdiffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
+  `roughplastic`, `thindielectric`, `null`, ...) with the parameters it declares, and
+  `twosided` (one nested BSDF); an `id` makes it referable by `ref`. Composites nest other
+  BSDFs (inline `<bsdf>` or `<ref id>`, in order): `blendbsdf` (two, and a `weight`, a number
+  or a texture), `mask` (one, `opacity`, default 0.5; Mitsuba's `twosided` may not wrap it,
+  nor a blend with a transmitting child), `normalmap` (one, a `normalmap` bitmap, give it
+  `raw=true`) and `bumpmap` (one, a nested unnamed height `<texture>`, `scale`); the last two
+  take `flip_invalid_normals` and `use_shadowing_function` (default true, as Mitsuba 3.9).
 - `emitter`: `area` inside a shape; `radiance` as `rgb`, `spectrum` (`value="v"` or
   `"l1:v1, l2:v2, ..."` in nm) or blackbody (`<spectrum type="blackbody">` with
   `temperature` and optional `scale`, or Mitsuba 0.6's `<blackbody temperature=...>`).
