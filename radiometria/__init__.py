@@ -13,7 +13,6 @@ rm.radiometry.planck(550.0, 5000.0)  # W sr^-1 m^-2 nm^-1
 """
 
 import importlib
-import importlib.metadata
 from typing import TYPE_CHECKING
 
 # The subpackages load on first use (PEP 562), so that `radiometria render --help` or a script
@@ -50,7 +49,8 @@ __all__ = [*_SUBPACKAGES, "__version__"]
 
 def __getattr__(name: str):
     if name == "__version__":  # importlib.metadata costs ~50 ms: `radiometria --help` skips it
-        globals()[name] = version = importlib.metadata.version("radiometria")
+        version = importlib.import_module("importlib.metadata").version("radiometria")
+        globals()[name] = version
         return version
     if name in _SUBPACKAGES:
         module = importlib.import_module(f"{__name__}.{name}")
