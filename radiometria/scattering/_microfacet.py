@@ -225,7 +225,10 @@ class TrowbridgeReitzDistribution(eqx.Module):
 # Beckmann
 
 _INV_SQRT_PI = 0.5641895835477563  # 1 / sqrt(pi)
-_NEWTON_STEPS = 10
+# From the fitted start, two Newton steps reach |C(b) - u| < 1e-5 for every (theta, u) tried
+# (grazing to normal incidence, u within 1e-4 of 0 and 1, float32 and float64: the same
+# slopes as 40 steps); one step is spare. Each step costs an erfinv and an exp per sample.
+_NEWTON_STEPS = 3
 
 
 def _beckmann_sample11(cos_theta: Array, u0: Array, u1: Array) -> tuple[Array, Array]:
