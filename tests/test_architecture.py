@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "radiometria"
 
 # design.md, "The house, floor by floor"; floor-1 private helpers are shared by every floor.
 FLOORS = {
-    "constants": 1, "_checks": 1, "_types": 1, "_math": 1, "_io": 1, "_bits": 1,
+    "constants": 1, "_checks": 1, "_types": 1, "_math": 1, "_io": 1, "_bits": 1, "_timing": 1,
     "radiometry": 2, "montecarlo": 2,
     "photometry": 3, "colorimetry": 3,
     "upsampling": 4, "scattering": 4, "camera": 4, "media": 4,
@@ -23,6 +23,14 @@ LAZY_OK = {"matplotlib", "trimesh", "mitsuba", "OpenEXR", "Imath", "tqdm", "scip
 # The command line imports each command's module when that command runs: `radiometria --help`
 # starts without JAX, and the CPU device count is set before JAX is first imported.
 LAZY_MODULES = {"cli.py"}
+
+
+def test_every_top_level_module_has_a_floor():
+    """A module missing from FLOORS would be skipped by the floor test below."""
+    names = {p.stem for p in PACKAGE.glob("*.py")} | {
+        p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()
+    }
+    assert not names - set(FLOORS), f"add to FLOORS: {sorted(names - set(FLOORS))}"
 
 
 def _modules():
