@@ -9,7 +9,15 @@ from jaxtyping import Array, Float
 
 from ..._math import dot
 from ...montecarlo import sample_uniform_cone
+from ...upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
 from .._spectral import SpectrumTable
+from .._textures import (
+    AbstractTexture,
+    ConstantTexture,
+    TextureSpec,
+    concatenate_textures,
+    texture_parameter,
+)
 from ._base import EmissionSample, LightSample
 from ._common import (
     AbstractDeltaLight,
@@ -50,6 +58,12 @@ def spot_falloff(cos_theta, cutoff, beam_width):
     return xp.where(c > xp.cos(cutoff), inside, 0.0)
 
 
+def _spot_texture(spec: TextureSpec, where: str) -> AbstractTexture:
+    """A spot's `texture` as Mitsuba 3 (3.9) evaluates it: the texels' bounded (albedo)
+    spectra, without D65 (checked against Mitsuba's spot read from XML in the tests)."""
+    return texture_parameter(spec, RGBAlbedoSpectrum, "texture", where)
+
+
 class SpotLight(AbstractDeltaLight):
     r"""Spot lights: every `spot` emitter of a scene, one row each.
 
@@ -65,6 +79,12 @@ class SpotLight(AbstractDeltaLight):
     - `intensity`: `SpectrumTable`, the on-axis intensity, one row per spot. [W sr^-1 nm^-1]
     - `cos_cutoff`, `cutoff`, `beam_width`: `(m,)` cone angles (cosine; [rad]).
     - `cdf`: `(m,)` cumulative probabilities of picking each spot; `phi`: power (static).
+    - `texture`: the spots' `texture`s (Mitsuba's: a bitmap over the spot's image plane,
+        the texels' albedo spectra, as Mitsuba renders XML scenes), one row each (1 for
+        spots without one), or `None` when no spot has one. Direction $(x, y, z)$ in the
+        spot's frame is looked up at
+        $uv = (1/2 + x / (2 z \tan\theta_c),\ 1/2 + y / (2 z \tan\theta_c))$ and multiplies
+        the intensity. Spots are still picked by their untextured power (unbiased either way).
 
     !!! note "Thesis"
         Chapter 8 (light sources); eq. 1.10-1.12 (intensity and irradiance).
@@ -75,7 +95,7 @@ class SpotLight(AbstractDeltaLight):
 
     NAME: ClassVar[str] = "spot"
     PARAMETERS: ClassVar[frozenset[str]] = frozenset(
-        {"intensity", "cutoff_angle", "beam_width", "to_world"}
+        {"intensity", "cutoff_angle", "beam_width", "to_world", "texture"}
     )
     position: Float[Array, "m 3"]
     world_to_local: Float[Array, "m 3 3"]
@@ -84,6 +104,7 @@ class SpotLight(AbstractDeltaLight):
     beam_width: Float[Array, " m"]
     cdf: Float[Array, " m"]
     phi: float = eqx.field(static=True)
+    texture: AbstractTexture | None = None
 
     @classmethod
     def from_properties(
@@ -91,9 +112,9 @@ class SpotLight(AbstractDeltaLight):
     ) -> "SpotLight":
         """Spot lights from scene parameters (Mitsuba's names and defaults): `intensity`
         (default 1) [W sr^-1 nm^-1], `cutoff_angle` (default 20) and `beam_width` (default
-        3/4 of the cutoff) [degrees], `to_world` (position and +z axis). A `texture` is not
-        supported. Bad values raise `ValueError` naming `where`."""
-        pos, inv, rows, cut, beam, powers = [], [], [], [], [], []
+        3/4 of the cutoff) [degrees], `to_world` (position and +z axis), `texture` (a bitmap
+        `TextureSpec`, class docstring). Bad values raise `ValueError` naming `where`."""
+        pos, inv, rows, cut, beam, powers, textures = [], [], [], [], [], [], []
         theta = np.linspace(0.0, np.pi, 20001)
         for p, w in zip(params, where, strict=True):
             m = to_world_param(p, w)
@@ -114,6 +135,14 @@ class SpotLight(AbstractDeltaLight):
             rows.append(row)
             cut.append(c)
             beam.append(b)
+            tex = p.get("texture")
+            if tex is not None and (not isinstance(tex, TextureSpec) or tex.type != "bitmap"):
+                raise ValueError(f"{w}: parameter 'texture' must be a bitmap texture, got {tex!r}.")
+            textures.append(
+                _spot_texture(tex, w)
+                if tex is not None
+                else ConstantTexture.from_values([1.0], RGBIlluminantSpectrum, dtype)
+            )
             f = spot_falloff(np.cos(theta), c, b) * np.sin(theta)
             powers.append(2.0 * np.pi * row.mean() * np.trapezoid(f, theta))
         return cls(
@@ -124,7 +153,22 @@ class SpotLight(AbstractDeltaLight):
             beam_width=jnp.asarray(beam, dtype),
             cdf=jnp.asarray(row_cdf(np.array(powers)), dtype),
             phi=float(np.sum(powers)),
+            texture=concatenate_textures(textures)
+            if any(p.get("texture") is not None for p in params)
+            else None,
         )
+
+    def _intensity(self, j, w, wavelength_nm):
+        """The intensity of spots `j` (n,) along world directions `w` (n, 3) from their apexes,
+        with their textures, without the falloff."""
+        out = self.intensity(j, wavelength_nm)
+        if self.texture is None:
+            return out
+        local = jnp.einsum("nij,nj->ni", self.world_to_local[j], w)
+        z = local[:, 2] * jnp.tan(self.cutoff[j])
+        z = jnp.where(jnp.abs(z) > 0, z, 1.0)
+        uv = jnp.stack([0.5 + 0.5 * local[:, 0] / z, 0.5 + 0.5 * local[:, 1] / z], axis=-1)
+        return out * self.texture(j, wavelength_nm, uv.astype(wavelength_nm.dtype))
 
     def _falloff(self, j, w):
         """The falloff of spots `j` (n,) along world directions `w` (n, 3) from their apexes."""
@@ -138,7 +182,7 @@ class SpotLight(AbstractDeltaLight):
         # The direction from the apex to p in the spot's frame (Mitsuba: to_world^-1 (-wi)).
         falloff = self._falloff(j, -wi)
         scale = falloff / jnp.where(ok, dist2, 1.0)
-        le = self.intensity(j, wavelength_nm) * scale[:, None]
+        le = self._intensity(j, -wi, wavelength_nm) * scale[:, None]
         ok = ok & (falloff > 0)
         return LightSample(
             wi=wi,
@@ -162,16 +206,16 @@ class SpotLight(AbstractDeltaLight):
         to_world = jnp.linalg.inv(self.world_to_local[j])
         d = jnp.einsum("nij,nj->ni", to_world, local)
         d = d / jnp.sqrt(dot(d, d))[:, None]
-        intensity = self.intensity(j, wavelength_nm)
         to_obs = observer - self.position[j]
         return EmissionSample(
             p=self.position[j],
             n=jnp.zeros_like(d),
             d=d,
-            le=intensity * self._falloff(j, d)[:, None],
+            le=self._intensity(j, d, wavelength_nm) * self._falloff(j, d)[:, None],
             pdf_pos=prob,
             pdf_dir=1.0 / (2.0 * jnp.pi * (1.0 - cos_max)),
-            le_observer=intensity * self._falloff(j, to_obs)[:, None],
+            le_observer=self._intensity(j, to_obs, wavelength_nm)
+            * self._falloff(j, to_obs)[:, None],
             delta_pos=jnp.ones(prob.shape, bool),
             pdf_dir_observer=jnp.where(
                 self._falloff(j, to_obs) > 0, 1.0 / (2.0 * jnp.pi * (1.0 - cos_max)), 0.0

@@ -26,7 +26,7 @@ __all__ = ["TEXTURED_PARAMETERS", "texture_property", "texture_ref_properties", 
 # (plugin type, parameter) pairs whose value may be a texture.
 TEXTURED_PARAMETERS = frozenset(
     {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity"),
-     ("normalmap", "normalmap"), ("bumpmap", "texture")}
+     ("normalmap", "normalmap"), ("bumpmap", "texture"), ("spot", "texture")}
     | {(p, n) for p in ("plastic", "roughplastic")
        for n in ("diffuse_reflectance", "specular_reflectance")}
 )  # fmt: skip
@@ -39,7 +39,7 @@ _TEXTURE_PARAMETERS = {
 
 def _check_textured(ctx, ch, parent, name: str) -> None:
     kind = parent.attrib.get("type", "")
-    if parent.tag != "bsdf" or (kind, name) not in TEXTURED_PARAMETERS:
+    if parent.tag not in ("bsdf", "emitter") or (kind, name) not in TEXTURED_PARAMETERS:
         where = f"<{parent.tag} type='{kind}'>"
         raise ctx.err(
             ch, f"a texture is not supported for parameter '{name}' of {where} (line "
