@@ -26,7 +26,7 @@ classical $w = \varrho$ at an event and $w = 1$ past the end.
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, Float, Int
 
 from .._checks import as_float_array, check_in_range
 from .._math import safe_div
@@ -139,11 +139,16 @@ class HomogeneousMedium(AbstractMedium):
         t_max: Float[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
         u: Float[Array, "n d"],
+        channel: Int[Array, " n"] | None = None,
     ) -> MediumInteraction:
         """Sample the distance to the next interaction on `(0, t_max)` from `u[:, 0]` in
         [0, 1) (the mixture over wavelengths of the class docstring; the variate is remapped
         to choose the wavelength and then the distance). Returns a `MediumInteraction` with
-        the weights of the module docstring."""
+        the weights of the module docstring and the per-wavelength densities `pdf`.
+
+        With `channel` `(n,)` (indices into the `k` wavelengths) the distance is sampled at
+        that wavelength alone, `u[:, 0]` unchanged, and the weight is $f_j / p_c$ (the
+        path-level spectral MIS of `volpathmis` combines it with `pdf`, `Miller2019`)."""
         st, ss = self.coefficients(wavelength_nm)
         n, k = st.shape
         d = check_in_range(as_float_array(t_max, "t_max"), "t_max", 0.0, np.inf)
@@ -158,15 +163,20 @@ class HomogeneousMedium(AbstractMedium):
         ku = u0 * k
         j = jnp.clip(jnp.floor(ku), 0, k - 1).astype(jnp.int32)
         u1 = jnp.clip(ku - j.astype(ku.dtype), 0.0, 1.0 - jnp.finfo(ku.dtype).eps)
+        if channel is not None:
+            j = jnp.clip(jnp.asarray(channel, jnp.int32), 0, k - 1)
+            u1 = u0
         st_j = jnp.take_along_axis(st, j[:, None], axis=1)[:, 0]
         pos = st_j > 0
         t = jnp.where(pos, -jnp.log1p(-u1) / jnp.where(pos, st_j, 1.0), jnp.inf)
         scattered = t < d
         t_end = jnp.where(scattered, t, d)
         tr = jnp.exp(-optical_depth(st, t_end[:, None]))  # T_j(t) or T_j(t_max), (n, k)
-        pdf_t = jnp.mean(st * tr, axis=1)  # mixture density at t
-        p_none = jnp.mean(tr, axis=1)  # probability of no event before t_max
-        w_event = safe_div(ss * tr, pdf_t[:, None])
-        w_none = safe_div(tr, p_none[:, None])
-        weight = jnp.where(scattered[:, None], w_event, w_none)
-        return MediumInteraction(t=t_end, scattered=scattered, weight=weight)
+        pdf = jnp.where(scattered[:, None], st * tr, tr)  # per wavelength, (n, k)
+        if channel is None:
+            p_used = jnp.mean(pdf, axis=1)  # the mixture's density (or P(no event))
+        else:
+            p_used = jnp.take_along_axis(pdf, j[:, None], axis=1)[:, 0]
+        f = jnp.where(scattered[:, None], ss * tr, tr)
+        weight = safe_div(f, p_used[:, None])
+        return MediumInteraction(t=t_end, scattered=scattered, weight=weight, pdf=pdf)

@@ -19,6 +19,10 @@ class MediumInteraction(eqx.Module):
     - `weight`: the estimator's throughput weight for the segment `(n, k)`, at the path's
         wavelengths (`sigma_s T / pdf` at a scattering event, `T / P(no event)` past it).
         [1]
+    - `pdf`: `(n, k)` the density of the sampled outcome had the distance been sampled at
+        wavelength `j` alone (`sigma_t,j T_j(t)` at an event, `T_j(t_max)` past the end), for
+        path-level spectral MIS (`Miller2019`); None for estimators without one (tracking).
+        [scene units^-1 at an event, 1 past it]
 
     ??? cite "References"
         `Pharr2023` §11.4 (free-flight sampling); `Novak2018` §4.
@@ -27,6 +31,7 @@ class MediumInteraction(eqx.Module):
     t: Float[Array, " n"]
     scattered: Bool[Array, " n"]
     weight: Float[Array, "n k"]
+    pdf: Float[Array, "n k"] | None = None
 
 
 class AbstractMedium(eqx.Module):

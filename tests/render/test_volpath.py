@@ -224,6 +224,38 @@ def test_volumetric_white_furnace(g):
     _check_mean(out, 1.0)
 
 
+def test_spectral_mis_over_paths_is_unbiased_with_lower_variance():
+    """`volpathmis`'s path-level spectral MIS (`spectral_mis="path"`), `volpath`'s
+    per-flight mixture ("segment") and hero-only sampling ("none") are estimators of one
+    expectation: in a closed emitting enclosure filled with a purely scattering medium of
+    strongly chromatic extinction (0.2 to 5 per unit across the spectrum, a 25x ratio; 12
+    segments, so the truncated furnace is below 1 but the same for all three), their means
+    agree. The path-level weights are bounded by k over the whole path, where per-flight
+    weights multiply, so its variance is the lowest (measured 0.45 against 0.68 per-flight and
+    2.0 hero-only)."""
+    room = _box([-1, -1, -1], [1, 1, 1], inward=True)
+    scene = _scene([(*room, 0, True, -1, 0)], [_medium(_ramp(0.2, 5.0), 1.0)], camera_medium=0)
+    n, depth = 4096, 12
+    w = jax.random.normal(jax.random.key(8), (n, 3), F32)
+    d = w / jnp.linalg.norm(w, axis=-1, keepdims=True)
+    o = jax.random.uniform(jax.random.key(9), (n, 3), F32, -0.5, 0.5)
+    u = jax.random.uniform(jax.random.key(10), (n, 1 + volpath_sample_dimensions(depth)), F32)
+    lam, _ = sample_hero_wavelengths(u[:, 0])
+    out = {}
+    for mode in ("segment", "path", "none"):
+        run = eqx.filter_jit(
+            functools.partial(volpath_radiance, max_depth=depth, rr_depth=depth, spectral_mis=mode)
+        )
+        out[mode] = np.asarray(run(scene, o, d, lam, u[:, 1:]), np.float64)
+    for mode in ("segment", "none"):
+        a, b = out[mode], out["path"]
+        se = np.sqrt(a.var() / a.size + b.var() / b.size)
+        assert abs(a.mean() - b.mean()) < 5 * se, (mode, a.mean(), b.mean(), se)
+    var = {mode: v.var() for mode, v in out.items()}
+    assert var["path"] < 0.85 * var["segment"], var
+    assert var["path"] < 0.5 * var["none"], var
+
+
 def _chandrasekhar_h(albedo: float, mu: np.ndarray, n_nodes: int = 200) -> np.ndarray:
     """Chandrasekhar's H-function of isotropic scattering, from the nonlinear integral
     equation 1/H(mu) = sqrt(1 - a) + (a/2) int_0^1 mu' H(mu') / (mu + mu') dmu'

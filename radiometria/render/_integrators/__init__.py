@@ -26,3 +26,4 @@ from ._volpath import (
     volpath_radiance as volpath_radiance,
     volpath_sample_dimensions as volpath_sample_dimensions,
 )
+from ._volpathmis import VolPathMIS as VolPathMIS

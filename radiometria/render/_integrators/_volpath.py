@@ -31,11 +31,26 @@ the same way, multiplying the transmittance of each piece (exact for homogeneous
 tracking for grids); any other surface blocks them. A surface with `interior`/`exterior`
 indices and a real BSDF (a dielectric) changes the medium when a sampled direction crosses it.
 
+**Spectral MIS.** A path carries `k` wavelengths but samples one distance per free flight;
+how the `k` per-wavelength densities $p_j$ of that sample are combined is `spectral_mis`
+(homogeneous media; grids always use weighted delta tracking). `"segment"` (`volpath`): each
+free flight draws its wavelength afresh and is weighted by the one-sample balance heuristic
+of that flight alone, $f_j / \frac1k\sum_i p_i$. `"path"` (`volpathmis`, `Miller2019`, Mitsuba
+3's `volpathmis`): the wavelength $c$ is drawn once per path and every contribution is
+weighted by the balance heuristic over whole paths, $F_j / \frac1k\sum_i P_i$ with
+$P_i = \prod p_i$ over the path's free flights, kept as normalised ratios
+$r_i = P_i / \frac1k\sum P$ (`_VolState.mis`), so a flight's weight is
+$f_j / \frac1k\sum_i r_i p_i$ (bounded by `k` over the whole path, where per-segment weights
+are bounded by `k` per segment). `"none"` (`volpathmis` with `use_spectral_mis=false`, and
+Mitsuba's `volpath` in spectral variants): wavelength $c$ once per path, weight $f_j / p_c$.
+All three are unbiased at every wavelength and differ only in variance.
+
 **Variates.** Per scattering vertex the eight variates of `path_radiance` (`[light point u0,
 u1 | BSDF or phase u0, u1 | light choice, BSDF lobe | roulette, unused]`, at the same
 dimensions as `Path`, so that on a scene without media `volpath` consumes exactly the
 variates of `path` and renders the same image), then four per segment after all those:
-`[free flight, seed of the further free flights and tracking steps, unused, unused]`.
+`[free flight, seed of the further free flights and tracking steps, the path's free-flight
+wavelength (first segment, "path"/"none"), unused]`.
 Variates beyond the first free flight of a segment come from hashing the seed with the step
 (`pcg4d`, `Jarzynski2020`).
 
@@ -68,9 +83,16 @@ from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
 from ._path import DIMENSIONS_PER_BOUNCE, _default_chunk, _offset, _vertex
 from ._segments import run_segments
 
-__all__ = ["MEDIUM_DIMENSIONS", "VolPath", "volpath_radiance", "volpath_sample_dimensions"]
+__all__ = [
+    "MEDIUM_DIMENSIONS",
+    "SPECTRAL_MIS",
+    "VolPath",
+    "volpath_radiance",
+    "volpath_sample_dimensions",
+]
 
 MEDIUM_DIMENSIONS = 4  # variates per segment for the media (module docstring)
+SPECTRAL_MIS = ("segment", "path", "none")  # `volpath_radiance(spectral_mis=...)`
 _MAX_NULL = 8  # null-surface crossings per segment and per shadow ray
 
 
@@ -116,6 +138,19 @@ def _crossed(scene: RenderScene, face, w, medium):
     return jnp.where(interior == KEEP_MEDIUM, medium, into)
 
 
+def _path_mis(weight, pdf, mis, channel):
+    """Path-level spectral MIS (module docstring, "Spectral MIS"): the weight `f_j / p_c`
+    of a free flight sampled at wavelength `c` becomes `f_j / mean_i(r_i p_i)`, and the ratios
+    become `r_j p_j / mean_i(r_i p_i)` (detached: sampling densities)."""
+    pdf = jax.lax.stop_gradient(pdf)
+    p_c = jnp.take_along_axis(pdf, channel[:, None], axis=1)
+    rp = mis * pdf
+    m = jnp.mean(rp, axis=1, keepdims=True)
+    ok = m > 0
+    m = jnp.where(ok, m, 1.0)
+    return jnp.where(ok, weight * p_c / m, 0.0), jnp.where(ok, rp / m, mis)
+
+
 def _attached_weight(media: MediumSet, medium, mi, t_max, wavelength_nm):
     """Free-flight weights with detached sampling and attached coefficients (module
     docstring, "Derivatives"): the value is unchanged, the derivative is the weight's."""
@@ -150,6 +185,8 @@ class _VolState(eqx.Module):
     eta_scale: Array  # (n,): product of eta^2 over refractions, for roulette
     hero_only: Array  # bool (n,): secondary wavelengths terminated by dispersion
     medium: Array  # int32 (n,): the medium `d` travels in (-1: vacuum)
+    mis: Array  # (n, k): path-level spectral MIS ratios P_j / mean_i P_i (module docstring)
+    channel: Array  # int32 (n,): the wavelength index free flights are sampled at ("path")
 
 
 class _Walk(eqx.Module):
@@ -166,6 +203,7 @@ class _Walk(eqx.Module):
     face: Array
     surface: Array  # the walk ended on a non-null surface
     cos_o: Array
+    mis: Array  # (n, k) spectral MIS ratios after the walk's free flights
     uv: Array  # (n, 2) surface coordinates of the surface hit (textures)
     ns: Array  # (n, 3) shading normal of the surface hit (`_vertex`), for the BSDF frame
 
@@ -189,7 +227,8 @@ def _bounded_loop(body, init, n: int, differentiable: bool, pending):
     return jax.lax.while_loop(cond, step, (jnp.int32(0), init))[1]
 
 
-def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hide_emitters):
+def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hide_emitters,
+          spectral_mis):  # fmt: skip
     """Trace segment `b` from each path's vertex through null surfaces to the next real
     vertex (a medium interaction or a surface), gathering emission on the way."""
     n = state.o.shape[0]
@@ -209,6 +248,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         face=jnp.zeros((n,), jnp.int32),
         surface=jnp.zeros((n,), bool),
         cos_o=jnp.zeros((n,), dtype),
+        mis=state.mis,
         uv=jnp.zeros((n, 2), dtype),
         ns=jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3)),
     )
@@ -224,8 +264,14 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
             t_max = jnp.where(v.valid, v.t, jnp.inf)
             inside = w.pending & (w.medium >= 0)
             t_max = jnp.where(inside, t_max, 0.0)
-            mi = media.sample_free_flight(w.medium, w.o, d, t_max, wavelength_nm, u_ff[:, None])
+            channel = None if spectral_mis == "segment" else state.channel
+            mi = media.sample_free_flight(
+                w.medium, w.o, d, t_max, wavelength_nm, u_ff[:, None], channel
+            )
             weight = _attached_weight(media, w.medium, mi, t_max, wavelength_nm)
+            if spectral_mis == "path":
+                weight, ratios = _path_mis(weight, mi.pdf, w.mis, state.channel)
+                ratios = jnp.where(inside[:, None], ratios, w.mis)
             beta = jnp.where(inside[:, None], beta * weight, beta)
             event = inside & mi.scattered
             t_event = mi.t
@@ -246,6 +292,8 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         medium = w.medium
         if scene.media is not None:
             medium = jnp.where(null_hit, _crossed(scene, v.face, d, w.medium), w.medium)
+        if scene.media is None or spectral_mis != "path":
+            ratios = w.mis
         offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
         o = jnp.where(null_hit[:, None], _offset(v.p, v.n, d, offset), w.o)
         ended = w.pending & ~null_hit
@@ -262,6 +310,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
             face=jnp.where(ended, v.face, w.face),
             surface=jnp.where(ended, hit & ~null_hit, w.surface),
             cos_o=jnp.where(ended, v.cos_o, w.cos_o),
+            mis=ratios,
             uv=jnp.where(ended[:, None], v.uv, w.uv),
             ns=jnp.where(ended[:, None], v.ns, w.ns),
         )
@@ -410,11 +459,13 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
         eta_scale=eta_scale,
         hero_only=state.hero_only | terminate,
         medium=medium,
+        mis=walk.mis,
+        channel=state.channel,
     )
 
 
 def _segment(scene, state, wavelength_nm, sample, b, *, max_depth, rr_depth, hide_emitters,
-             max_null, differentiable):  # fmt: skip
+             max_null, differentiable, spectral_mis):  # fmt: skip
     """Segment `b` of every path: the walk to the next vertex, then (but for the last
     segment) its scattering."""
     dtype = state.o.dtype
@@ -430,14 +481,18 @@ def _segment(scene, state, wavelength_nm, sample, b, *, max_depth, rr_depth, hid
         ),
     )
     u_surface, u_med = sample()
+    if spectral_mis != "segment":  # the path's free-flight wavelength, chosen once
+        k = wavelength_nm.shape[-1]
+        first = jnp.clip(jnp.floor(u_med[:, 2] * k), 0, k - 1).astype(jnp.int32)
+        state = eqx.tree_at(lambda s: s.channel, state, jnp.where(b == 0, first, state.channel))
     walk = _walk(
         scene, state, wavelength_nm, u_med, b, max_null=max_null,
-        differentiable=differentiable, hide_emitters=hide_emitters,
+        differentiable=differentiable, hide_emitters=hide_emitters, spectral_mis=spectral_mis,
     )  # fmt: skip
     ended = eqx.tree_at(
-        lambda s: (s.radiance, s.alive, s.beta, s.medium),
+        lambda s: (s.radiance, s.alive, s.beta, s.medium, s.mis),
         state,
-        (walk.radiance, jnp.zeros_like(alive), walk.beta, walk.medium),
+        (walk.radiance, jnp.zeros_like(alive), walk.beta, walk.medium, walk.mis),
     )
     if max_depth == 1:
         return ended
@@ -467,6 +522,7 @@ def volpath_radiance(
     compact: bool = True,
     max_null: int = _MAX_NULL,
     variates=None,
+    spectral_mis: str = "segment",
 ) -> Float[Array, "n k"]:
     r"""Spectral radiance along each ray, by volumetric path tracing (module docstring).
 
@@ -486,6 +542,9 @@ def volpath_radiance(
     - `max_null`: static bound on the null surfaces crossed per segment and per shadow ray.
     - `variates`: instead of `u`, a function `variates(first, n_dims, paths)` (the
         integrators' `VariateFn`).
+    - `spectral_mis`: how free flights in homogeneous media combine the path's wavelengths
+        (module docstring, "Spectral MIS"): `"segment"` (`volpath`), `"path"` (`volpathmis`)
+        or `"none"` (`volpathmis` with `use_spectral_mis=false`). Same expectation.
 
     **Returns:**
 
@@ -504,6 +563,8 @@ def volpath_radiance(
     for name, value in (("max_depth", max_depth), ("rr_depth", rr_depth), ("max_null", max_null)):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
+    if spectral_mis not in SPECTRAL_MIS:
+        raise ValueError(f"`spectral_mis` must be one of {SPECTRAL_MIS}, got {spectral_mis!r}.")
     n_rays = origins.shape[0]
     surface_dims = DIMENSIONS_PER_BOUNCE * max(max_depth - 1, 0)
     if variates is None:
@@ -544,13 +605,15 @@ def volpath_radiance(
         eta_scale=jnp.ones((n_rays,), dtype),
         hero_only=jnp.zeros((n_rays,), bool),
         medium=jnp.full((n_rays,), scene.camera_medium, jnp.int32),
+        mis=jnp.ones((n_rays, k), dtype),
+        channel=jnp.zeros((n_rays,), jnp.int32),
     )
 
     def segment(state, wavelength_nm, paths, b):
         return _segment(
             scene, state, wavelength_nm, functools.partial(sample, b, paths), b,
             max_depth=max_depth, rr_depth=rr_depth, hide_emitters=hide_emitters,
-            max_null=max_null, differentiable=not compact,
+            max_null=max_null, differentiable=not compact, spectral_mis=spectral_mis,
         )  # fmt: skip
 
     chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)

@@ -10,6 +10,7 @@ from ...media import GridMedium, HenyeyGreenstein
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
 from ._base import AbstractMediumPlugin
+from ._homogeneous import tabulate_extinction
 
 __all__ = ["GridMediumPlugin"]
 
@@ -126,7 +127,10 @@ class GridMediumPlugin(AbstractMediumPlugin):
             raise ValueError(f"{where}: a heterogeneous medium needs a sigma_t volume.")
         density, spec = _factor_sigma_t(vol, where)
         scale = float(params.get("scale", 1.0))
-        sigma_t = tabulate_spectrum(spec, RGBUnboundedSpectrum) * scale
+        if vol["type"] == "constvolume":  # an RGB value: as Mitsuba's homogeneous sigma_t
+            sigma_t = tabulate_extinction(spec) * scale
+        else:  # a grid's RGB: unbounded (`_factor_sigma_t`)
+            sigma_t = tabulate_spectrum(spec, RGBUnboundedSpectrum) * scale
         albedo_grid, albedo_value = _factor_albedo(params.get("albedo", 0.75), where)
         alb = params.get("albedo")
         if albedo_grid is not None and not np.allclose(_to_world(alb), _to_world(vol)):

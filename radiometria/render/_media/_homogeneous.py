@@ -8,10 +8,21 @@ from jaxtyping import Array, Float, Int
 
 from ...media import HenyeyGreenstein, HomogeneousMedium
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
-from .._spectral import SpectrumTable, tabulate_spectrum
+from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
 from ._base import AbstractMediumPlugin
 
-__all__ = ["HomogeneousMediumPlugin"]
+__all__ = ["HomogeneousMediumPlugin", "tabulate_extinction"]
+
+
+def tabulate_extinction(value) -> np.ndarray:
+    """An extinction value from a scene file tabulated on the renderer's grid: an RGB triple
+    with every component <= 1 as Mitsuba 3 reads it (a bounded reflectance spectrum,
+    `RGBAlbedoSpectrum`; Mitsuba refuses larger components), a larger one as an unbounded
+    spectrum (`RGBUnboundedSpectrum`, our extension); spectra and numbers as given.
+    [scene units^-1]"""
+    if isinstance(value, LinearRGB) and max(value.rgb) <= 1.0:
+        return tabulate_spectrum(value, RGBAlbedoSpectrum)
+    return tabulate_spectrum(value, RGBUnboundedSpectrum)
 
 
 class HomogeneousMediumPlugin(AbstractMediumPlugin):
@@ -49,13 +60,14 @@ class HomogeneousMediumPlugin(AbstractMediumPlugin):
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "HomogeneousMediumPlugin":
         """One medium from a scene file's parameters (Mitsuba's defaults: `sigma_t` 1,
-        `albedo` 0.75, `scale` 1, isotropic): an RGB `sigma_t` is an unbounded spectrum, an
-        RGB `albedo` an albedo spectrum (thesis 2.2.3). Errors name `where`."""
+        `albedo` 0.75, `scale` 1, isotropic): an RGB `sigma_t` is upsampled as Mitsuba 3 does,
+        a bounded spectrum, when its components are <= 1 (`tabulate_extinction`), an RGB
+        `albedo` is an albedo spectrum (thesis 2.2.3). Errors name `where`."""
         unknown = sorted(set(params) - cls.PARAMETERS)
         if unknown:
             raise ValueError(f"{where}: unsupported medium parameter(s) {unknown}.")
         scale = float(params.get("scale", 1.0))
-        sigma_t = tabulate_spectrum(params.get("sigma_t", 1.0), RGBUnboundedSpectrum) * scale
+        sigma_t = tabulate_extinction(params.get("sigma_t", 1.0)) * scale
         albedo = tabulate_spectrum(params.get("albedo", 0.75), RGBAlbedoSpectrum)
         g = float(params.get("g", 0.0))
         for name, v, hi in (("sigma_t", sigma_t, np.inf), ("albedo", albedo, 1.0)):

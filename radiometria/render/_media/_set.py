@@ -5,7 +5,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
-from ...media import MediumInteraction, PhaseSample
+from ...media import HomogeneousMedium, MediumInteraction, PhaseSample
 from ._base import AbstractMediumPlugin
 
 __all__ = ["KEEP_MEDIUM", "VACUUM", "MediumSet"]
@@ -105,18 +105,24 @@ class MediumSet(eqx.Module):
         t_max: Float[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
         u: Float[Array, "n d"],
+        channel: Int[Array, " n"] | None = None,
     ) -> MediumInteraction:
         """Free-flight sampling on `(0, t_max)` [scene units] in each path's medium (a vacuum:
-        no event, weight 1); `u` `(n, d)` uniform variates, `d >= 1`."""
+        no event, weight 1); `u` `(n, d)` uniform variates, `d >= 1`. `channel`: sample
+        homogeneous media at that wavelength index alone (`HomogeneousMedium`); `pdf` is 1
+        where a medium has no per-wavelength density (a vacuum, grids)."""
         n, k = wavelength_nm.shape
         dtype = origins.dtype
         t = jnp.where(medium >= 0, t_max, 0.0)
-        out = MediumInteraction(
-            t=t_max, scattered=jnp.zeros((n,), bool), weight=jnp.ones((n, k), dtype)
-        )
+        ones = jnp.ones((n, k), dtype)
+        out = MediumInteraction(t=t_max, scattered=jnp.zeros((n,), bool), weight=ones, pdf=ones)
         media, masks = self._parts(medium, wavelength_nm)
         for med, mask in zip(media, masks, strict=True):
-            mi = med.sample_free_flight(origins, directions, t, wavelength_nm, u)
+            if isinstance(med, HomogeneousMedium):
+                mi = med.sample_free_flight(origins, directions, t, wavelength_nm, u, channel)
+            else:
+                mi = med.sample_free_flight(origins, directions, t, wavelength_nm, u)
+                mi = MediumInteraction(t=mi.t, scattered=mi.scattered, weight=mi.weight, pdf=ones)
             out = jax.tree.map(lambda a, b, mask=mask: _select(mask, a, b), mi, out)
         return out
 
