@@ -160,7 +160,7 @@ def bdpt_mis_weight(
     power = heuristic == "power"
 
     def sums(fwd, rev, count, prev_delta, delta, first):
-        j = jnp.arange(fwd.shape[0])[:, None]
+        j = jnp.arange(fwd.shape[0], dtype=jnp.int32)[:, None]
         r = _remap0(rev) / _remap0(fwd)
         if power:
             r = r * r
@@ -502,11 +502,11 @@ class BDPT(AbstractIntegrator):
         )
         rev_qsm = pq_rev * qs.conv_prev
 
-        jc = jnp.arange(cam.pdf_rev.shape[0])[:, None]
+        jc = jnp.arange(cam.pdf_rev.shape[0], dtype=jnp.int32)[:, None]
         rev_c = jnp.where(jc == t - 1, rev_pt[None], cam.pdf_rev)
         rev_c = jnp.where(jc == t - 2, rev_ptm[None], rev_c)
         delta_c = cam.delta & (jc != t - 1)
-        jl = jnp.arange(lv.pdf_rev.shape[0])[:, None]
+        jl = jnp.arange(lv.pdf_rev.shape[0], dtype=jnp.int32)[:, None]
         rev_l = jnp.where(jl == s - 1, rev_qs[None], lv.pdf_rev)
         rev_l = jnp.where(jl == s - 2, rev_qsm[None], rev_l)
         delta_l = lv.delta & (jl != s - 1)
