@@ -6,19 +6,22 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import ConductorBxDF
-from ...upsampling import RGBUnboundedSpectrum
+from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import SpectrumTable
-from .._textures import AbstractTexture, ConstantTexture
+from .._textures import AbstractTexture, ConstantTexture, texture_parameter
 from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
 from ._ior import conductor_ior
 
 
-def conductor_textures(params: Properties, where: str) -> tuple[ConstantTexture, ...]:
-    """`(eta, k, specular_reflectance)` textures of one conductor (Mitsuba's defaults)."""
+def conductor_textures(params: Properties, where: str) -> tuple[AbstractTexture, ...]:
+    """`(eta, k, specular_reflectance)` textures of one conductor (Mitsuba's defaults); a
+    textured `specular_reflectance` is upsampled as a bounded reflectance, as Mitsuba's
+    bitmaps are."""
     eta, k = conductor_ior(params, where)
-    refl = ConstantTexture.from_values(
-        [params.get("specular_reflectance", 1.0)], RGBUnboundedSpectrum
-    )
+    spec = params.get("specular_reflectance", 1.0)
+    refl = texture_parameter(spec, RGBAlbedoSpectrum, "specular_reflectance", where)
+    if refl is None:
+        refl = ConstantTexture.from_values([spec], RGBUnboundedSpectrum)
     table = lambda x: ConstantTexture(SpectrumTable(jnp.asarray(x[None], jnp.float32)))
     return table(eta), table(k), refl
 
@@ -37,7 +40,8 @@ class Conductor(AbstractMaterial):
     - `eta`, `k`: textures of the real and imaginary parts of the index, relative to the
         outside (from `material`: `"none"`, the default, a perfect mirror; `"Au"`, `"Ag"`,
         `"Cu"`, `"Al"`: measured tables; or given as spectra). [1]
-    - `specular_reflectance`: texture of a factor on the reflectance (default 1). [1]
+    - `specular_reflectance`: texture of a factor on the reflectance (default 1; a number, a
+        spectrum or a bitmap/checkerboard looked up at the hit's uv). [1]
     - `two_sided`: `(m,)` bool.
 
     !!! note "Thesis"
@@ -51,6 +55,7 @@ class Conductor(AbstractMaterial):
     PARAMETERS: ClassVar[frozenset[str]] = frozenset(
         {"material", "eta", "k", "specular_reflectance"}
     )
+    USES_UV: ClassVar[bool] = True
     eta: AbstractTexture
     k: AbstractTexture
     specular_reflectance: AbstractTexture
@@ -61,7 +66,9 @@ class Conductor(AbstractMaterial):
         unknown_parameters(params, cls, where)
         return cls(*conductor_textures(params, where), jnp.asarray([two_sided], bool))
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
-        refl = self.specular_reflectance(row, wavelength_nm)
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
+    ) -> ScaledBxDF:
+        refl = self.specular_reflectance(row, wavelength_nm, uv)
         eta, k = valid_ior(self.eta(row, wavelength_nm), self.k(row, wavelength_nm))
         return ScaledBxDF(ConductorBxDF(eta, k), refl, refl)

@@ -7,7 +7,8 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import RoughConductorBxDF
 from .._textures import AbstractTexture
-from ._base import AbstractMaterial, Properties, ScaledBxDF, scalar, unknown_parameters
+from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
+from ._composite import scalar_texture
 from ._conductor import conductor_textures, valid_ior
 
 DISTRIBUTIONS = ("beckmann", "ggx")
@@ -25,12 +26,15 @@ def distribution(params: Properties, where: str) -> str:
     return value
 
 
-def roughness(params: Properties, where: str) -> tuple[Array, Array]:
-    """`(alpha_u, alpha_v)` as `(1,)` float32 arrays (Mitsuba's default `alpha` = 0.1)."""
-    alpha = scalar(params, "alpha", 0.1, where)
-    alpha_u = scalar(params, "alpha_u", alpha, where)
-    alpha_v = scalar(params, "alpha_v", alpha, where)
-    return jnp.asarray([alpha_u], jnp.float32), jnp.asarray([alpha_v], jnp.float32)
+def roughness(params: Properties, where: str) -> tuple[AbstractTexture, AbstractTexture]:
+    """`(alpha_u, alpha_v)` as one-row grey textures: numbers >= 0 or textures (Mitsuba's
+    default `alpha` = 0.1; `alpha_u`, `alpha_v` default to `alpha`)."""
+    alpha = params.get("alpha", 0.1)
+    inf = float("inf")
+    return tuple(
+        scalar_texture(params.get(name, alpha), name, where, lower=0.0, upper=inf)
+        for name in ("alpha_u", "alpha_v")
+    )
 
 
 class RoughConductor(AbstractMaterial):
@@ -44,7 +48,8 @@ class RoughConductor(AbstractMaterial):
     **Fields:**
 
     - `eta`, `k`, `specular_reflectance`: as `Conductor`. [1]
-    - `alpha_u`, `alpha_v`: `(m,)` roughness along the tangent and bitangent. [1]
+    - `alpha_u`, `alpha_v`: grey textures of the roughness along the tangent and bitangent
+        (numbers, or textures looked up at the hit's uv). [1]
     - `two_sided`: `(m,)` bool.
 
     !!! note "Thesis"
@@ -61,11 +66,12 @@ class RoughConductor(AbstractMaterial):
         {"material", "eta", "k", "specular_reflectance", "distribution", "alpha", "alpha_u",
          "alpha_v", "sample_visible"}
     )  # fmt: skip
+    USES_UV: ClassVar[bool] = True
     eta: AbstractTexture
     k: AbstractTexture
     specular_reflectance: AbstractTexture
-    alpha_u: Float[Array, " m"]
-    alpha_v: Float[Array, " m"]
+    alpha_u: AbstractTexture
+    alpha_v: AbstractTexture
     two_sided: Bool[Array, " m"]
 
     @classmethod
@@ -78,12 +84,16 @@ class RoughConductor(AbstractMaterial):
             jnp.asarray([two_sided], bool),
         )
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
-        refl = self.specular_reflectance(row, wavelength_nm)
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
+    ) -> ScaledBxDF:
+        refl = self.specular_reflectance(row, wavelength_nm, uv)
         eta, k = valid_ior(self.eta(row, wavelength_nm), self.k(row, wavelength_nm))
-        bxdf = RoughConductorBxDF(
-            self.alpha_u[row], eta, k, self.alpha_v[row], distribution=self.DISTRIBUTION
+        alpha_u, alpha_v = (
+            jnp.maximum(a(row, wavelength_nm, uv)[..., 0], 1e-4)
+            for a in (self.alpha_u, self.alpha_v)
         )
+        bxdf = RoughConductorBxDF(alpha_u, eta, k, alpha_v, distribution=self.DISTRIBUTION)
         return ScaledBxDF(bxdf, refl, refl)
 
 

@@ -20,7 +20,8 @@ class RoughDielectric(AbstractMaterial):
     **Fields:**
 
     - `eta`, `specular_reflectance`, `specular_transmittance`: as `Dielectric`. [1]
-    - `alpha_u`, `alpha_v`: `(m,)` roughness (default `alpha` = 0.1). [1]
+    - `alpha_u`, `alpha_v`: grey textures of the roughness (default `alpha` = 0.1; numbers,
+        or textures looked up at the hit's uv). [1]
     - `two_sided`: `(m,)` bool.
 
     !!! note "Thesis"
@@ -37,11 +38,12 @@ class RoughDielectric(AbstractMaterial):
          "distribution", "alpha", "alpha_u", "alpha_v", "sample_visible"}
     )  # fmt: skip
     TRANSMISSIVE: ClassVar[bool] = True
+    USES_UV: ClassVar[bool] = True
     eta: AbstractTexture
     specular_reflectance: AbstractTexture
     specular_transmittance: AbstractTexture
-    alpha_u: Float[Array, " m"]
-    alpha_v: Float[Array, " m"]
+    alpha_u: AbstractTexture
+    alpha_v: AbstractTexture
     two_sided: Bool[Array, " m"]
 
     @classmethod
@@ -54,12 +56,16 @@ class RoughDielectric(AbstractMaterial):
             jnp.asarray([two_sided], bool),
         )
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
+    ) -> ScaledBxDF:
         eta = jnp.maximum(self.eta(row, wavelength_nm), 1e-3)
+        alpha_u, alpha_v = (
+            jnp.maximum(a(row, wavelength_nm, uv)[..., 0], 1e-4)
+            for a in (self.alpha_u, self.alpha_v)
+        )
         return ScaledBxDF(
-            RoughDielectricBxDF(
-                self.alpha_u[row], eta, self.alpha_v[row], distribution=self.DISTRIBUTION
-            ),
+            RoughDielectricBxDF(alpha_u, eta, alpha_v, distribution=self.DISTRIBUTION),
             self.specular_reflectance(row, wavelength_nm),
             self.specular_transmittance(row, wavelength_nm),
         )

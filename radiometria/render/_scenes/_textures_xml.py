@@ -26,7 +26,10 @@ __all__ = ["TEXTURED_PARAMETERS", "texture_property", "texture_ref_properties", 
 # (plugin type, parameter) pairs whose value may be a texture.
 TEXTURED_PARAMETERS = frozenset(
     {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity"),
-     ("normalmap", "normalmap"), ("bumpmap", "texture"), ("spot", "texture")}
+     ("normalmap", "normalmap"), ("bumpmap", "texture"), ("spot", "texture"),
+     ("conductor", "specular_reflectance")}
+    | {("roughconductor", n) for n in ("specular_reflectance", "alpha", "alpha_u", "alpha_v")}
+    | {("roughdielectric", n) for n in ("alpha", "alpha_u", "alpha_v")}
     | {(p, n) for p in ("plastic", "roughplastic")
        for n in ("diffuse_reflectance", "specular_reflectance")}
 )  # fmt: skip
