@@ -34,6 +34,14 @@ and rejects everything else with an error that names the file, the line and the 
 - `emitter`: `area` inside a shape; `radiance` as `rgb`, `spectrum` (`value="v"` or
   `"l1:v1, l2:v2, ..."` in nm) or blackbody (`<spectrum type="blackbody">` with
   `temperature` and optional `scale`, or Mitsuba 0.6's `<blackbody temperature=...>`).
+  Outside shapes: `point`, `spot` (with a bitmap `texture` projected over its cone, as
+  Mitsuba), `directional`, `constant`, `envmap`.
+- Textures (`_textures_xml.TEXTURED_PARAMETERS`): `diffuse` `reflectance`; `plastic` and
+  `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
+  `roughconductor` `specular_reflectance`; `roughconductor` and `roughdielectric` `alpha`,
+  `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`; `normalmap`, `bumpmap`;
+  `spot` `texture`. Scalar parameters (roughness, weight, opacity) use the texels'
+  luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables depend on it).
 - `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,
   diagonal, as Mitsuba), `to_world`, `near_clip`, `far_clip`; `thinlens` with those and
   `aperture_radius` (required), `focus_distance`; `orthographic` (`to_world`, whose scale sets
