@@ -1,0 +1,140 @@
+"""Time to equal error: bidirectional path tracing (`bdpt`) against path tracing (issue 14).
+
+Same machine, same run. Two scenes at `--size` px (default 64), `max_depth` 5:
+
+- `hard`: Mitsuba's Cornell box whose ceiling light sits behind a thin glass panel
+  (`thindielectric`) just below it: next-event estimation's shadow rays stop at the glass, so
+  the path tracer finds the light only by BSDF samples that pass the panel, while bdpt's light
+  subpaths cross it and connect to camera vertices (and to the camera).
+- `cornell`: the built-in Cornell box; Mitsuba 3's `path` and `ptracer` (`scalar_spectral`)
+  render its XML twin in the same run when `--mitsuba` is given.
+
+The reference of each scene is our `path` at `--ref-spp` (independent of bdpt). Each renderer
+then renders spp = 2, 4, ... with fresh seeds; the wall time (after a warm-up render that
+compiles) and the relative MSE `mean((x - ref)^2 / (ref^2 + 0.01))` are recorded, and
+log-log interpolation gives each renderer's time to reach a common error (`path`'s error at
+the largest spp rendered). The ratios are printed and written as JSON.
+
+    .venv/bin/python benchmarks/bench_bidirectional.py [--size 64] [--ref-spp 4096]
+        [--quick] [--mitsuba] [--out bench_bidirectional.json]
+"""
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np
+
+from benchmarks.bench_render import _time_at_error
+from tests.render._mitsuba import cornell_box_xml, rel_mse, render_mitsuba
+
+DEPTH = 5
+
+
+def _hard_xml(folder: Path, size: int) -> Path:
+    """The Cornell box with a thin glass panel 2 cm below its light (the light is the
+    rectangle at y = 0.99, |x| <= 0.23, -0.18 <= z <= 0.2 in Mitsuba's `cornell_box()`)."""
+    xml = cornell_box_xml(size, size)
+    panel = (
+        '  <bsdf type="thindielectric" id="panel"/>\n'
+        '  <shape type="rectangle" id="glass-panel"><transform name="to_world">'
+        '<scale x="0.3" y="0.3" z="1"/><rotate x="1" angle="90"/>'
+        '<translate x="0" y="0.97" z="0.01"/></transform><ref id="panel"/></shape>\n'
+    )
+    path = folder / "cornell_glass_panel.xml"
+    path.write_text(xml.replace("</scene>", panel + "</scene>"))
+    return path
+
+
+def _ours(scene_name, size, integrator):
+    from radiometria.render import compile_scene, load_scene, render
+
+    scene, camera, rfilter = compile_scene(load_scene(scene_name), width=size, height=size)
+
+    def run(spp, seed):
+        img = render(
+            scene, camera=camera, rfilter=rfilter, spp=spp, seed=seed,
+            integrator=integrator, progress=False,
+        )  # fmt: skip
+        return np.asarray(img, np.float64)
+
+    return run
+
+
+def _mitsuba_cornell(size, integrator: str):
+    import mitsuba as mi
+
+    mi.set_variant("scalar_spectral")
+    xml = cornell_box_xml(size, size).replace('type="path"', f'type="{integrator}"')
+    scene = mi.load_string(xml)
+
+    def run(spp, seed):
+        return render_mitsuba(scene, spp, seed=seed)
+
+    return run
+
+
+def _curve(run, spps, reference, seed0):
+    run(spps[0], seed0 - 1)  # warm-up: compiles
+    times, errors = [], []
+    for i, spp in enumerate(spps):
+        t0 = time.perf_counter()
+        img = run(spp, seed0 + i)
+        times.append(time.perf_counter() - t0)
+        errors.append(rel_mse(img, reference))
+    return times, errors
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=64)
+    parser.add_argument("--ref-spp", type=int, default=4096)
+    parser.add_argument("--quick", action="store_true", help="size 32, reference 1024 spp")
+    parser.add_argument("--mitsuba", action="store_true", help="Mitsuba path/ptracer too")
+    parser.add_argument("--out", default="bench_bidirectional.json")
+    args = parser.parse_args(argv)
+    size, ref_spp = (32, 1024) if args.quick else (args.size, args.ref_spp)
+    spps = [2, 4, 8, 16] if args.quick else [4, 8, 16, 32, 64]
+
+    from radiometria.render import Path as PathTracer
+    from radiometria.render._integrators import BDPT
+
+    folder = Path(tempfile.mkdtemp(prefix="bench_bidirectional_"))
+    scenes = {"hard": str(_hard_xml(folder, size)), "cornell": "cornell-box"}
+    results = {}
+    for name, scene in scenes.items():
+        path = _ours(scene, size, PathTracer(max_depth=DEPTH))
+        t0 = time.perf_counter()
+        reference = path(ref_spp, 10_000)
+        print(f"[{name}] reference: path {ref_spp} spp in {time.perf_counter() - t0:.1f} s")
+        runners = {"path": path, "bdpt": _ours(scene, size, BDPT(max_depth=DEPTH))}
+        if args.mitsuba and name == "cornell":
+            for integ in ("path", "ptracer"):
+                runners[f"mitsuba {integ}"] = _mitsuba_cornell(size, integ)
+        curves = {k: _curve(run, spps, reference, 100) for k, run in runners.items()}
+        target = curves["path"][1][-1]
+        row = {"size": size, "spp": spps, "target_rel_mse": target, "renderers": {}}
+        for k, (times, errors) in curves.items():
+            t = _time_at_error(times, errors, target)
+            row["renderers"][k] = {"times_s": times, "rel_mse": errors, "time_at_target_s": t}
+            print(f"[{name}] {k:16s} relMSE {[f'{e:.3g}' for e in errors]} "
+                  f"time {[f'{x:.2f}' for x in times]} s -> {t:.2f} s at {target:.3g}")  # fmt: skip
+        ratio = (
+            row["renderers"]["path"]["time_at_target_s"]
+            / row["renderers"]["bdpt"]["time_at_target_s"]
+        )
+        row["path_over_bdpt_time"] = ratio
+        print(f"[{name}] time to equal relMSE, path / bdpt = {ratio:.2f}")
+        results[name] = row
+    Path(args.out).write_text(json.dumps(results, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
