@@ -1,13 +1,13 @@
-"""Time to equal error on the Cornell box: radiometria's spectral path tracer against Mitsuba 3.
+"""Time to equal error: radiometria's spectral path tracer against Mitsuba 3 on the same scene.
 
-Same machine, same run: the Cornell box (Mitsuba 3's `cornell_box()`, radiometria's
-`cornell-box`) at 256 x 256 px, spectral, `max_depth` 8, Gaussian film. One high-spp Mitsuba
-`scalar_spectral` image is the reference (cached in `--cache`). Each renderer then renders
-spp = 4, 8, ..., 64 with fresh seeds; for each image the wall time (after a warm-up render that
-compiles) and the relative MSE against the reference,
-`mean((x - ref)^2 / (ref^2 + 0.01))`, are recorded. Log-log interpolation gives each
-renderer's time to reach a common error (by default Mitsuba `scalar_spectral`'s error at
-16 spp); the ratios are printed and written as JSON.
+Same machine, same run. `--scene cornell` (default): the Cornell box (Mitsuba 3's
+`cornell_box()`, radiometria's `cornell-box`) at 256 x 256 px, spectral, `max_depth` 8,
+Gaussian film. One high-spp Mitsuba `scalar_spectral` image is the reference (cached in
+`--cache`). Each renderer then renders spp = 4, 8, ..., 64 with fresh seeds; for each image the
+wall time (after a warm-up render that compiles) and the relative MSE against the reference,
+`mean((x - ref)^2 / (ref^2 + 0.01))`, are recorded. Log-log interpolation gives each renderer's
+time to reach a common error (by default Mitsuba `scalar_spectral`'s error at 16 spp); the
+ratios are printed and written as JSON.
 
 Renderers: radiometria with the independent and the (padded Owen-scrambled) Sobol sampler,
 Mitsuba 3 `scalar_spectral`, and Mitsuba 3 `llvm_ad_spectral` when libLLVM is found
@@ -15,10 +15,18 @@ Mitsuba 3 `scalar_spectral`, and Mitsuba 3 `llvm_ad_spectral` when libLLVM is fo
 XLA is given one CPU device per core (`--xla_force_host_platform_device_count`, set before JAX
 is imported) and radiometria shards the pixels over them; Mitsuba uses its thread pool.
 
-    .venv/bin/python benchmarks/bench_render.py [--size 256] [--ref-spp 1024] [--quick]
+    .venv/bin/python benchmarks/bench_render.py [--scene cornell|textured|envmap]
+        [--size 256] [--ref-spp 1024] [--quick]
 
-The script also renders the scene from a Mitsuba XML file with both renderers (helper G's
-loader) and prints the per-channel means.
+`--scene textured`: a Mitsuba XML scene (written into `--cache` with its assets) of a floor
+with an sRGB PNG `bitmap` texture (bilinear, repeated), a `checkerboard` sphere, a rough
+plastic box and a rectangle light. `--scene envmap`: a diffuse sphere, a rough conductor
+sphere and a floor under an equirectangular OpenEXR environment map (importance sampled by
+both), no other light. Both renderers load the same file (`load_scene`, `mi.load_file`); the
+integrator is the file's (`path`, `max_depth` 8).
+
+For the Cornell box the script also renders the scene from a Mitsuba XML file with both
+renderers and prints the per-channel means.
 """
 
 import argparse
@@ -59,26 +67,113 @@ def _time_at_error(times, errors, target):
     return float(np.exp(lt[i - 1] + slope * (x - le[i - 1])))
 
 
-def _ours(size, sampler):
-    from radiometria.render import Path, compile_scene, load_scene, render
+_SENSOR = """<sensor type="perspective"><float name="fov" value="{fov}"/>
+    <transform name="to_world"><lookat origin="{origin}" target="0, 0.3, 0" up="0, 1, 0"/>
+    </transform><sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="{size}"/>
+      <integer name="height" value="{size}"/></film></sensor>"""
 
-    scene, camera, rfilter = compile_scene(load_scene("cornell-box"), width=size, height=size)
+_FLOOR = """<shape type="rectangle"><transform name="to_world"><scale value="4"/>
+    <rotate x="1" angle="-90"/></transform>{bsdf}</shape>"""
+
+
+def _textured_xml(folder: Path, size: int) -> Path:
+    """The textured benchmark scene and its PNG texture (a smooth colour field with edges)."""
+    from PIL import Image
+
+    y, x = np.mgrid[0:256, 0:256] / 256.0
+    rgb = np.stack([0.5 + 0.4 * np.sin(12 * x), 0.5 + 0.4 * np.cos(9 * y), (x + y) / 2], -1)
+    rgb[(np.floor(8 * x) + np.floor(8 * y)) % 2 == 0] *= 0.6
+    Image.fromarray(np.uint8(255 * np.clip(rgb, 0, 1))).save(folder / "bench_texture.png")
+    floor = _FLOOR.format(
+        bsdf="""<bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+      <string name="filename" value="bench_texture.png"/>
+      <transform name="to_uv"><scale value="3"/></transform></texture></bsdf>"""
+    )
+    xml = f"""<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="8"/></integrator>
+  {_SENSOR.format(fov=45, origin="0, 2.2, 4.5", size=size)}
+  {floor}
+  <shape type="sphere"><point name="center" value="-0.8, 0.6, 0"/><float name="radius" value="0.6"/>
+    <bsdf type="diffuse"><texture type="checkerboard" name="reflectance">
+      <rgb name="color0" value="0.8, 0.2, 0.1"/><rgb name="color1" value="0.9, 0.9, 0.8"/>
+      <transform name="to_uv"><scale x="8" y="4"/></transform></texture></bsdf></shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.45"/><rotate y="1" angle="30"/>
+      <translate x="0.8" y="0.45" z="0.2"/></transform>
+    <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.1, 0.3, 0.7"/>
+      <float name="alpha" value="0.2"/></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="0.8"/>
+      <rotate x="1" angle="90"/><translate y="3.5" z="1"/></transform>
+    <emitter type="area"><rgb name="radiance" value="12, 11, 10"/></emitter></shape>
+</scene>
+"""
+    path = folder / f"bench_textured_{size}.xml"
+    path.write_text(xml)
+    return path
+
+
+def _envmap_xml(folder: Path, size: int) -> Path:
+    """The environment-map benchmark scene and its EXR sky (a sun-like blob on a gradient)."""
+    from radiometria.camera import write_exr
+
+    h, w = 128, 256
+    v, u = (np.mgrid[0:h, 0:w] + 0.5) / np.array([h, w])[:, None, None]
+    sky = np.stack([0.3 + 0.5 * (1 - v), 0.4 + 0.5 * (1 - v), 0.6 + 0.6 * (1 - v)], -1)
+    sky[v > 0.5] = [0.25, 0.2, 0.15]  # the ground below the horizon
+    sun = np.exp(-(((u - 0.3) / 0.02) ** 2 + ((v - 0.25) / 0.02) ** 2))
+    sky += 200.0 * sun[..., None] * np.array([1.0, 0.9, 0.7])
+    write_exr(folder / "bench_sky.exr", sky)
+    floor = _FLOOR.format(
+        bsdf='<bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>'
+    )
+    xml = f"""<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="8"/></integrator>
+  {_SENSOR.format(fov=45, origin="0, 1.5, 4.5", size=size)}
+  <emitter type="envmap"><string name="filename" value="bench_sky.exr"/></emitter>
+  {floor}
+  <shape type="sphere"><point name="center" value="-0.7, 0.6, 0"/><float name="radius" value="0.6"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.2"/></bsdf></shape>
+  <shape type="sphere"><point name="center" value="0.7, 0.6, 0"/><float name="radius" value="0.6"/>
+    <bsdf type="roughconductor"><string name="material" value="Cu"/>
+      <float name="alpha" value="0.15"/></bsdf></shape>
+</scene>
+"""
+    path = folder / f"bench_envmap_{size}.xml"
+    path.write_text(xml)
+    return path
+
+
+def _ours(size, sampler, xml=None):
+    from radiometria.render import (
+        Path as PathTracer,
+        compile_scene,
+        load_scene,
+        render,
+        scene_integrator,
+    )
+
+    description = load_scene("cornell-box" if xml is None else xml)
+    scene, camera, rfilter = compile_scene(description, width=size, height=size)
+    integrator = PathTracer(max_depth=8) if xml is None else scene_integrator(description)
 
     def run(spp, seed):
         img = render(
             scene, camera=camera, rfilter=rfilter, spp=spp, seed=seed,
-            integrator=Path(max_depth=8), sampler=sampler, progress=False,
+            integrator=integrator, sampler=sampler, progress=False,
         )  # fmt: skip
         return np.asarray(img, np.float64)
 
     return run
 
 
-def _mitsuba(size, variant):
+def _mitsuba(size, variant, xml=None):
     import mitsuba as mi
 
     mi.set_variant(variant)
-    scene = mi.load_dict(cornell_dict(size, size, variant=variant))
+    if xml is None:
+        scene = mi.load_dict(cornell_dict(size, size, variant=variant))
+    else:
+        scene = mi.load_file(str(xml))
 
     def run(spp, seed):
         mi.set_variant(variant)
@@ -89,6 +184,7 @@ def _mitsuba(size, variant):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", choices=["cornell", "textured", "envmap"], default="cornell")
     parser.add_argument("--size", type=int, default=256)
     parser.add_argument("--ref-spp", type=int, default=1024)
     parser.add_argument("--spps", type=int, nargs="+", default=[4, 8, 16, 32, 64])
@@ -104,20 +200,26 @@ def main(argv=None) -> int:
 
     from radiometria.render import Independent, OwenSobol
 
-    print(f"devices: {jax.devices()}; cores: {os.cpu_count()}")
-    ref_path = args.cache / f"mitsuba_ref_{args.size}_{args.ref_spp}.npy"
+    print(f"devices: {jax.devices()}; cores: {os.cpu_count()}; scene: {args.scene}")
+    xml = {"cornell": lambda *a: None, "textured": _textured_xml, "envmap": _envmap_xml}[
+        args.scene
+    ](args.cache, args.size)
+    tag = "" if xml is None else f"{args.scene}_"
+    ref_path = args.cache / f"mitsuba_ref_{tag}{args.size}_{args.ref_spp}.npy"
     if ref_path.exists():
         reference = np.load(ref_path)
     else:
         print(f"reference: Mitsuba scalar_spectral, {args.size}^2 px, {args.ref_spp} spp ...")
-        reference, t = _timed(lambda: _mitsuba(args.size, "scalar_spectral")(args.ref_spp, 12345))
+        reference, t = _timed(
+            lambda: _mitsuba(args.size, "scalar_spectral", xml)(args.ref_spp, 12345)
+        )
         np.save(ref_path, reference)
         print(f"  {t:.1f} s")
 
     renderers = {
-        "radiometria (independent)": _ours(args.size, Independent()),
-        "radiometria (sobol)": _ours(args.size, OwenSobol()),
-        "mitsuba scalar_spectral": _mitsuba(args.size, "scalar_spectral"),
+        "radiometria (independent)": _ours(args.size, Independent(), xml),
+        "radiometria (sobol)": _ours(args.size, OwenSobol(), xml),
+        "mitsuba scalar_spectral": _mitsuba(args.size, "scalar_spectral", xml),
     }
     llvm = os.environ.get("DRJIT_LIBLLVM_PATH") or next(
         (p for p in LLVM_CANDIDATES if Path(p).exists()), None
@@ -125,7 +227,7 @@ def main(argv=None) -> int:
     if llvm:
         os.environ["DRJIT_LIBLLVM_PATH"] = llvm
         try:
-            renderers["mitsuba llvm_ad_spectral"] = _mitsuba(args.size, "llvm_ad_spectral")
+            renderers["mitsuba llvm_ad_spectral"] = _mitsuba(args.size, "llvm_ad_spectral", xml)
         except Exception as err:  # noqa: BLE001 (libLLVM present but unusable: report and go on)
             print(f"llvm_ad_spectral unavailable: {err}")
 
@@ -155,6 +257,14 @@ def main(argv=None) -> int:
     print(f"\nmean RGB: reference {ref_mean}, radiometria (sobol, {args.spps[-1]} spp) {ours_mean}"
           f", ratio {ours_mean / ref_mean}")  # fmt: skip
 
+    out = args.cache / f"bench_render_{tag}{args.size}.json"
+    record = {"scene": args.scene, "size": args.size, "ref_spp": args.ref_spp, "target": target}
+    record.update(results=results, time_to_target=summary)
+    if xml is not None:
+        out.write_text(json.dumps(record, indent=1))
+        print(f"wrote {out}")
+        return 0
+
     # The same scene from a Mitsuba XML file, through both renderers.
     import mitsuba as mi
 
@@ -168,9 +278,6 @@ def main(argv=None) -> int:
     print(f"XML scene, 64 spp: Mitsuba mean {theirs.mean(axis=(0, 1))}, radiometria mean "
           f"{ours.mean(axis=(0, 1))}")  # fmt: skip
 
-    out = args.cache / f"bench_render_{args.size}.json"
-    record = {"size": args.size, "ref_spp": args.ref_spp, "target": target}
-    record.update(results=results, time_to_target=summary)
     out.write_text(json.dumps(record, indent=1))
     print(f"wrote {out}")
     return 0
