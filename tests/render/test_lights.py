@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import radiometria.render as rr
-from radiometria.render import SceneError
+from radiometria.render import LinearRGB, SceneError
 from radiometria.render._lights import (
     ConstantLight,
     DirectionalLight,
@@ -292,3 +292,45 @@ def test_light_set_matches_mitsuba(tmp_path):
     text = _scene(lights, integrator="path", extra=card)
     result = z_test_against_mitsuba(_write(tmp_path, text), spp=256, ref_spp=1024)
     assert result.passed, result.message
+
+
+def test_float_emission_is_a_grey_illuminant_as_in_mitsuba(tmp_path):
+    """Mitsuba 3 reads an emitter's `<float>` intensity or radiance as `<rgb value="v, v, v">`
+    (a D65-shaped grey), and a `<spectrum value="v">` as flat: checked on Mitsuba's point
+    light at three wavelengths; our loader turns the float into that grey and keeps the
+    spectrum flat."""
+    mi = pytest.importorskip("mitsuba")
+    dr = pytest.importorskip("drjit")
+    mi.set_variant("scalar_spectral")
+
+    def weights(value):
+        e = mi.load_dict({"type": "point", "position": [0, 0, 1], "intensity": value})
+        it = dr.zeros(mi.Interaction3f)
+        out = []
+        for wl in (400.0, 550.0, 700.0):
+            it.wavelengths = [wl] * 4
+            out.append(e.sample_direction(it, [0.5, 0.5])[1][0])
+        return np.array(out)
+
+    grey = weights({"type": "rgb", "value": [5.0, 5.0, 5.0]})
+    np.testing.assert_allclose(weights(5.0), grey, rtol=1e-6)
+    np.testing.assert_allclose(weights({"type": "uniform", "value": 5.0}), 5.0, rtol=1e-6)
+    assert np.ptp(grey) > 1.0  # the D65 shape: not flat
+
+    light = (
+        '<emitter type="point"><point name="position" value="0, 0, 1"/>'
+        '<float name="intensity" value="5"/></emitter>'
+        '<emitter type="spot"><spectrum name="intensity" value="5"/></emitter>'
+    )
+    area = (
+        '<shape type="rectangle"><emitter type="area"><float name="radiance" value="2"/>'
+        "</emitter></shape>"
+    )
+    desc = rr.load_scene(_write(tmp_path, _scene(light, extra=area)))
+    point, spot = desc.lights
+    assert isinstance(point.params["intensity"], LinearRGB)
+    np.testing.assert_array_equal(point.params["intensity"].rgb, [5.0, 5.0, 5.0])
+    assert spot.params["intensity"] == 5.0  # flat
+    (emitter,) = desc.emitters
+    assert isinstance(emitter.radiance, LinearRGB)
+    np.testing.assert_array_equal(emitter.radiance.rgb, [2.0, 2.0, 2.0])

@@ -640,11 +640,26 @@ def _plugin(ctx: _Ctx, node: _Node, registry: dict, what: str) -> tuple[str, dic
     return kind, _properties(ctx, node, set(registry[kind].PARAMETERS))
 
 
+def _grey_illuminant_floats(node: _Node, props: dict) -> dict:
+    """An emitter's `<float>` radiance, intensity or irradiance is a grey illuminant (D65
+    shaped, the given luminance), as Mitsuba 3 reads it (`texture_d65`: a float emits what
+    `<rgb value="v, v, v">` emits), while `<spectrum value="v">` stays flat (equal energy)."""
+    for ch in node.children:
+        name = ch.attrib.get("name")
+        if ch.tag == "float" and name in _EMISSION_PARAMS and isinstance(props.get(name), float):
+            props[name] = LinearRGB(np.full(3, props[name]))
+    return props
+
+
+_EMISSION_PARAMS = ("radiance", "intensity", "irradiance")
+
+
 def _emitter(ctx: _Ctx, node: _Node) -> dict:
     """An `area` emitter inside a shape (the shape's triangles emit)."""
     _, props = _plugin(ctx, node, {"area": LIGHTS["area"]}, "emitter (inside a <shape>)")
     if "radiance" not in props:
         raise ctx.err(node, "an area emitter needs a 'radiance'")
+    _grey_illuminant_floats(node, props)
     return {"radiance": props["radiance"], "two_sided": False}
 
 
@@ -662,6 +677,7 @@ def _light(ctx: _Ctx, node: _Node) -> LightDescription:
     that a missing, non-equirectangular or invalid file is named with this line."""
     lights = {k: v for k, v in LIGHTS.items() if k != "area"}
     kind, props = _plugin(ctx, node, lights, "emitter (outside a <shape>)")
+    _grey_illuminant_floats(node, props)
     where = f"{node.file or ctx.file}:{node.line}: <emitter type='{kind}'>"
     # Mitsuba's default emission is white light as an illuminant (its `texture_d65(name, 1)`:
     # D65 with Y = 1), not an equal-energy spectrum (a plain `1` would be one).
