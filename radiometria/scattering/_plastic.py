@@ -148,7 +148,7 @@ class PlasticBxDF(AbstractBxDF):
         eta,
         specular_reflectance=1.0,
         *,
-        nonlinear: bool = False,
+        nonlinear: bool | Array = False,
         specular_sampling_weight=None,
     ):
         d = _spectral(diffuse_reflectance, "diffuse_reflectance")
@@ -358,7 +358,7 @@ class RoughPlasticBxDF(AbstractBxDF):
         specular_reflectance=1.0,
         *,
         distribution: str = "beckmann",
-        nonlinear: bool = False,
+        nonlinear: bool | Array = False,
         specular_sampling_weight=None,
         tables: tuple | None = None,
     ):

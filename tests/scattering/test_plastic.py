@@ -106,3 +106,20 @@ def test_plastic_sample_weights_match_f_and_pdf():
     ok = ~s.is_delta & (s.pdf > 0)
     np.testing.assert_allclose(np.asarray(s.f)[ok], np.asarray(bxdf.f(wo, s.wi))[ok], rtol=1e-9)
     np.testing.assert_allclose(np.asarray(s.pdf)[ok], np.asarray(bxdf.pdf(wo, s.wi))[ok], rtol=1e-9)
+
+
+def test_nonlinear_flag_per_row_equals_one_bxdf_per_flag():
+    """A batch whose rows mix `nonlinear` True and False (the scene's plastics share one
+    BxDF) evaluates each row as the BxDF built with that row's flag alone."""
+    wo, wi = jnp.asarray(_dir(0.4, 0.3))[None], jnp.asarray(_dir(0.9, 2.0))[None]
+    wo, wi = jnp.repeat(wo, 2, 0), jnp.repeat(wi, 2, 0)
+    rho, eta = jnp.full((2, 4), 0.6), jnp.full((2,), 1.5)  # eta: one per row
+    flags = jnp.asarray([True, False])
+    for make in (
+        lambda nl: sc.PlasticBxDF(rho, eta, nonlinear=nl),
+        lambda nl: sc.RoughPlasticBxDF(rho, 0.3, 1.5, nonlinear=nl),
+    ):
+        mixed = np.asarray(make(flags).f(wo, wi))
+        for row, flag in enumerate((True, False)):
+            np.testing.assert_allclose(mixed[row], np.asarray(make(flag).f(wo, wi))[row])
+        assert not np.allclose(mixed[0], mixed[1])  # the flag matters at this albedo
