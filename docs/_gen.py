@@ -38,7 +38,7 @@ def public_objects():
     """Yield `(subpackage, name, object)` for every public name of every subpackage."""
     for sub in SUBPACKAGES:
         mod = importlib.import_module(f"radiometria.{sub}")
-        for name in sorted(vars(mod)):
+        for name in sorted(dir(mod)):  # dir: names a module loads lazily (PEP 562) too
             if name.startswith("_"):
                 continue
             obj = getattr(mod, name)
