@@ -3,7 +3,8 @@
 Every renderer concept is an abstract `equinox` Module with final implementations, one per
 file, in a folder that shows the architecture (the model of diffrax's `_solver/`):
 
-- `_integrators/`: `AbstractIntegrator` (`Path`, `Direct`);
+- `_integrators/`: `AbstractIntegrator` (`Path`, `Direct`, `VolPath`, `VolPathMIS`, `PTracer`,
+  `BDPT`);
 - `_samplers/`: `AbstractSampler` (`Independent`, `OwenSobol`);
 - `_materials/`: `AbstractMaterial`, BSDF plugins that build `radiometria.scattering` BxDFs
   (`Diffuse`, `OrenNayar`, `Conductor`, `RoughConductor`, `Dielectric`, `RoughDielectric`);
@@ -53,10 +54,13 @@ from ._geometry import (
     triangle_normals as triangle_normals,
 )
 from ._integrators import (
+    BDPT as BDPT,
     AbstractIntegrator as AbstractIntegrator,
     Direct as Direct,
     Path as Path,
     PTracer as PTracer,
+    VolPath as VolPath,
+    VolPathMIS as VolPathMIS,
     path_radiance as path_radiance,
     sample_dimensions as sample_dimensions,
 )
