@@ -12,6 +12,7 @@ __all__ = [
     "AbstractIntegrator",
     "VariateFn",
     "check_path_fields",
+    "scene_flag",
     "scene_max_depth",
 ]
 
@@ -23,6 +24,15 @@ def scene_max_depth(params: dict) -> int:
     `DEFAULT_UNBOUNDED_DEPTH`. Not checked here: the integrator's `__check_init__` does."""
     depth = params.get("max_depth", 8)
     return DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
+
+
+def scene_flag(params: dict, name: str, default: bool, where: str) -> bool:
+    """A scene file's boolean parameter `name` (default `default`): anything but a bool is a
+    `ValueError` naming `where` (no `bool("false")` coercion)."""
+    value = params.get(name, default)
+    if not isinstance(value, bool):
+        raise ValueError(f"{where}: `{name}` must be a boolean, got {value!r}.")
+    return value
 
 
 def check_path_fields(integrator) -> None:

@@ -4,7 +4,7 @@ from typing import ClassVar
 
 import equinox as eqx
 
-from ._base import AbstractIntegrator
+from ._base import AbstractIntegrator, scene_flag
 from ._path import DIMENSIONS_PER_BOUNCE, path_radiance, sample_dimensions
 
 _SEGMENTS = 2  # the camera segment and one scattering vertex's light and BSDF samples
@@ -51,10 +51,7 @@ class Direct(AbstractIntegrator):
                     f"{where}: the direct integrator takes {name} = {default}, got "
                     f"{params[name]!r}."
                 )
-        hide = params.get("hide_emitters", False)
-        if not isinstance(hide, bool):
-            raise ValueError(f"{where}: hide_emitters must be a boolean, got {hide!r}.")
-        return cls(hide_emitters=hide)
+        return cls(hide_emitters=scene_flag(params, "hide_emitters", False, where))
 
     def sample_dimensions(self) -> int:
         return sample_dimensions(_SEGMENTS)

@@ -63,7 +63,7 @@ from ...montecarlo import power_heuristic
 from ...scattering import coordinate_system
 from .._materials import HitGeometry
 from .._render_scene import RenderScene
-from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
+from ._base import AbstractIntegrator, check_path_fields, scene_flag, scene_max_depth
 
 __all__ = ["DIMENSIONS_PER_BOUNCE", "Path", "path_radiance", "sample_dimensions"]
 
@@ -487,11 +487,12 @@ class Path(AbstractIntegrator):
         """From a scene file's `max_depth` (default 8; -1 = unbounded, taken as
         `DEFAULT_UNBOUNDED_DEPTH`), `rr_depth` (default 5) and `hide_emitters` (default
         false)."""
-        depth = scene_max_depth(params)
-        hide = params.get("hide_emitters", False)
-        if not isinstance(hide, bool):
-            raise ValueError(f"{where}: `hide_emitters` must be a boolean, got {hide!r}.")
-        return cls(max_depth=depth, rr_depth=params.get("rr_depth", 5), hide_emitters=hide)
+        hide = scene_flag(params, "hide_emitters", False, where)
+        return cls(
+            max_depth=scene_max_depth(params),
+            rr_depth=params.get("rr_depth", 5),
+            hide_emitters=hide,
+        )
 
     def sample_dimensions(self) -> int:
         return sample_dimensions(self.max_depth)

@@ -79,7 +79,7 @@ from ...scattering import coordinate_system
 from .._materials._null import has_null, is_null
 from .._media import KEEP_MEDIUM, MediumSet
 from .._render_scene import RenderScene
-from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
+from ._base import AbstractIntegrator, check_path_fields, scene_flag, scene_max_depth
 from ._path import DIMENSIONS_PER_BOUNCE, _default_chunk, _offset, _vertex
 from ._segments import run_segments
 
@@ -652,23 +652,16 @@ class VolPath(AbstractIntegrator):
     hide_emitters: bool = eqx.field(static=True, default=False)
 
     def __check_init__(self):
-        for name in ("max_depth", "rr_depth"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
-        if not isinstance(self.hide_emitters, bool):
-            raise TypeError(f"`hide_emitters` must be a bool, got {self.hide_emitters!r}.")
+        check_path_fields(self)
 
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "VolPath":
         """From a scene file's `max_depth` (default 8; -1 = unbounded, taken as
         `DEFAULT_UNBOUNDED_DEPTH`), `rr_depth` (default 5) and `hide_emitters`."""
-        depth = params.get("max_depth", 8)
-        depth = DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
         return cls(
-            max_depth=depth,
+            max_depth=scene_max_depth(params),
             rr_depth=params.get("rr_depth", 5),
-            hide_emitters=bool(params.get("hide_emitters", False)),
+            hide_emitters=scene_flag(params, "hide_emitters", False, where),
         )
 
     def sample_dimensions(self) -> int:

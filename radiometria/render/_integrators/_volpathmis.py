@@ -5,7 +5,7 @@ from typing import ClassVar
 
 import equinox as eqx
 
-from ._base import DEFAULT_UNBOUNDED_DEPTH, AbstractIntegrator
+from ._base import AbstractIntegrator, check_path_fields, scene_flag, scene_max_depth
 from ._volpath import volpath_radiance, volpath_sample_dimensions
 
 
@@ -50,26 +50,20 @@ class VolPathMIS(AbstractIntegrator):
     use_spectral_mis: bool = eqx.field(static=True, default=True)
 
     def __check_init__(self):
-        for name in ("max_depth", "rr_depth"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"`{name}` must be an int >= 1, got {value!r}.")
-        for name in ("hide_emitters", "use_spectral_mis"):
-            if not isinstance(getattr(self, name), bool):
-                raise TypeError(f"`{name}` must be a bool, got {getattr(self, name)!r}.")
+        check_path_fields(self)
+        if not isinstance(self.use_spectral_mis, bool):
+            raise TypeError(f"`use_spectral_mis` must be a bool, got {self.use_spectral_mis!r}.")
 
     @classmethod
     def from_properties(cls, params: dict, *, where: str = "scene") -> "VolPathMIS":
         """From a scene file's `max_depth` (default 8; -1 = unbounded, taken as
         `DEFAULT_UNBOUNDED_DEPTH`), `rr_depth` (default 5), `hide_emitters` and
         `use_spectral_mis` (default True)."""
-        depth = params.get("max_depth", 8)
-        depth = DEFAULT_UNBOUNDED_DEPTH if depth is None or depth == -1 else depth
         return cls(
-            max_depth=depth,
+            max_depth=scene_max_depth(params),
             rr_depth=params.get("rr_depth", 5),
-            hide_emitters=bool(params.get("hide_emitters", False)),
-            use_spectral_mis=bool(params.get("use_spectral_mis", True)),
+            hide_emitters=scene_flag(params, "hide_emitters", False, where),
+            use_spectral_mis=scene_flag(params, "use_spectral_mis", True, where),
         )
 
     def sample_dimensions(self) -> int:
