@@ -3,7 +3,6 @@ the path tracer by the per-pixel z-test, bad parameters, the command line (issue
 
 import itertools
 
-import colour
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -11,11 +10,11 @@ import pytest
 from radiometria.camera import BoxFilter, read_exr
 from radiometria.cli import main
 from radiometria.montecarlo import pixel_z_test
-from radiometria.render import OwenSobol, Path, compile_scene, load_scene, render
+from radiometria.render import OwenSobol, Path, render
 from radiometria.render._integrators import BDPT, bdpt_mis_weight
 
 from ._mitsuba import cornell_box_materials_xml
-from .test_ptracer import _cornell_light_coverage
+from .test_ptracer import _cornell_light_coverage, _cornell_light_luminance
 
 # -- MIS weights --------------------------------------------------------------------------
 
@@ -148,15 +147,7 @@ def test_bdpt_cornell_light_pixels_closed_form():
     # max_depth 1 (box filter): the light's pixels are Y(L) times the area of its image in
     # each (the closed form of the ptracer tests); both strategies (0, 2) and (1, 1) count.
     size = 16
-    rs, _, _ = compile_scene(load_scene("cornell-box"), width=size, height=size)
-    nm = np.arange(360.0, 831.0)
-    le = np.asarray(rs.light.radiance(jnp.zeros(1, int), jnp.asarray(nm[None], jnp.float32)))
-    ybar = (
-        colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-        .align(colour.SpectralShape(360, 830, 1))
-        .values[:, 1]
-    )
-    expected = float(np.sum(le[0] * ybar) / np.sum(ybar)) * _cornell_light_coverage(size)
+    expected = _cornell_light_luminance() * _cornell_light_coverage(size)
     image = np.asarray(
         render("cornell-box", spp=256, width=size, height=size, integrator=BDPT(max_depth=1),
                rfilter=BoxFilter(), return_xyz=True, progress=False)

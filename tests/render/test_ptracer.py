@@ -117,6 +117,20 @@ def test_ptracer_agrees_with_path_on_cornell_box():
     np.testing.assert_allclose(pt.mean(axis=(0, 1)), ref.mean(axis=(0, 1)), rtol=0.05)
 
 
+def _cornell_light_luminance() -> float:
+    """Y of the Cornell box light's radiance: its spectrum (as the compiled scene holds it)
+    against colour-science's CIE 1931 y-bar, by 1 nm quadrature over 360-830 nm."""
+    rs, _, _ = compile_scene(load_scene("cornell-box"), width=4, height=4)
+    nm = np.arange(360.0, 831.0)
+    le = np.asarray(rs.light.radiance(jnp.zeros(1, int), jnp.asarray(nm[None], jnp.float32)))
+    ybar = (
+        colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+        .align(colour.SpectralShape(360, 830, 1))
+        .values[:, 1]
+    )
+    return float(np.sum(le[0] * ybar) / np.sum(ybar))
+
+
 def _cornell_light_coverage(size: int) -> np.ndarray:
     """Area [px^2] of each pixel covered by the image of the Cornell box light (the quad
     |x| <= 0.23, y = 0.99, -0.18 <= z <= 0.2, seen from (0, 0, 3.9) along -z, fov 39.3077
@@ -147,15 +161,7 @@ def test_ptracer_cornell_light_pixels_closed_form():
     # 1931 y-bar of colour-science. Per pixel to 1.5 % (a 2 % bias fails; the light-tracing
     # noise of the smallest covered pixel is ~0.3 % at 512 spp), the sum to 0.3 %.
     size = 16
-    rs, _, _ = compile_scene(load_scene("cornell-box"), width=size, height=size)
-    nm = np.arange(360.0, 831.0)
-    le = np.asarray(rs.light.radiance(jnp.zeros(1, int), jnp.asarray(nm[None], jnp.float32)))
-    ybar = (
-        colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-        .align(colour.SpectralShape(360, 830, 1))
-        .values[:, 1]
-    )
-    y_le = float(np.sum(le[0] * ybar) / np.sum(ybar))
+    y_le = _cornell_light_luminance()
     expected = y_le * _cornell_light_coverage(size)
     image = np.asarray(
         render("cornell-box", spp=512, width=size, height=size, integrator=PTracer(max_depth=1),
