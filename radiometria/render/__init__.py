@@ -17,6 +17,7 @@ file, in a folder that shows the architecture (the model of diffrax's `_solver/`
 - `_scenes/`: scene descriptions, the JSON and Mitsuba 3 XML formats, `compile_scene`;
 - `_registry.py`: the names scene files and the command line use, one registry per concept;
 - `_driver.py`: `render`, the batched, device-sharded render loop;
+- `_bdpt_strategies.py`: `bdpt_strategy_images`, the image of each bidirectional strategy;
 - `_cache.py`: `enable_compilation_cache`, JAX's persistent compilation cache on disk.
 """
 
@@ -26,6 +27,7 @@ from ._accelerators import (
     BVHAccelerator as BVHAccelerator,
     build_accelerator as build_accelerator,
 )
+from ._bdpt_strategies import bdpt_strategy_images as bdpt_strategy_images
 from ._cache import (
     CompilationCacheInfo as CompilationCacheInfo,
     clear_compilation_cache as clear_compilation_cache,

@@ -211,6 +211,9 @@ class BDPT(AbstractIntegrator):
     rr_depth: int = eqx.field(static=True, default=5)
     hide_emitters: bool = eqx.field(static=True, default=False)
     heuristic: str = eqx.field(static=True, default="power")
+    # `[s, t, weighted]` (int32, traced): evaluate that strategy alone, MIS-weighted or not
+    # (`radiometria.render.bdpt_strategy_images`); None: every strategy (the normal image).
+    select: Array | None = None
 
     def __check_init__(self):
         check_path_fields(self)
@@ -554,6 +557,8 @@ class BDPT(AbstractIntegrator):
         cam, lv, ue, light_delta = self._subpaths(
             scene, camera, origins, directions, wavelength_nm, variates, active
         )
+        if self.select is not None:
+            return self._selected(scene, camera, cam, lv, ue, light_delta, wavelength_nm)
         pairs_c, pairs_l = self.strategies()
 
         def one(carry, st):
@@ -573,6 +578,22 @@ class BDPT(AbstractIntegrator):
             return None, Splats(raster, value * weight[:, None], valid)
 
         _, splats = jax.lax.scan(one_splat, None, jnp.asarray(pairs_l, jnp.int32))
+        return radiance, splats
+
+    def _selected(self, scene, camera, cam, lv, ue, light_delta, wl):
+        """One strategy `self.select = [s, t, weighted]` alone: its estimate (MIS-weighted, or
+        with weight 1 where it is valid) as the camera-ray radiance (`t >= 2`) or as one row
+        of splats (`t = 1`); the other part is zero. The strategy is traced, so one compiled
+        step serves every strategy."""
+        s, t, weighted = self.select[0], self.select[1], self.select[2]
+        value, raster, valid, weight = self._strategy(
+            scene, camera, cam, lv, ue, light_delta, wl, s, t
+        )
+        w = jnp.where(weighted != 0, weight, valid.astype(value.dtype))
+        contrib = value * w[:, None]
+        splat = t == 1
+        radiance = jnp.where(splat, 0.0, contrib)
+        splats = Splats(raster[None], jnp.where(splat, contrib, 0.0)[None], (valid & splat)[None])
         return radiance, splats
 
 
