@@ -35,6 +35,7 @@ from ._materials import (
     NormalMap,
     OrenNayar,
     Plastic,
+    Principled,
     RoughConductor,
     RoughDielectric,
     RoughPlastic,
@@ -66,7 +67,7 @@ def _by_name(*plugins) -> dict:
 # Mitsuba 3's `<bsdf type=...>` names.
 MATERIALS = _by_name(
     Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null,
-    Plastic, RoughPlastic, ThinDielectric, BlendBSDF, Mask,
+    Plastic, RoughPlastic, ThinDielectric, BlendBSDF, Mask, Principled,
     BumpMap, NormalMap,
 )  # fmt: skip
 # Mitsuba 3's `<emitter type=...>` names.

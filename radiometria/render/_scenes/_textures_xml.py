@@ -32,6 +32,9 @@ TEXTURED_PARAMETERS = frozenset(
     | {("roughdielectric", n) for n in ("alpha", "alpha_u", "alpha_v")}
     | {(p, n) for p in ("plastic", "roughplastic")
        for n in ("diffuse_reflectance", "specular_reflectance")}
+    | {("principled", n) for n in ("base_color", "roughness", "anisotropic", "metallic",
+                                   "spec_trans", "spec_tint", "sheen", "sheen_tint",
+                                   "flatness", "clearcoat", "clearcoat_gloss")}
 )  # fmt: skip
 
 _TEXTURE_PARAMETERS = {
