@@ -9,6 +9,7 @@
   transmission, retroreflection, smooth and rough conductor and dielectric, two-sided wrapper;
 - `_plastic`, `_thin_dielectric`, `_blend`: smooth and rough plastic, the thin dielectric slab,
   blends of two BxDFs and partly transparent (masked) surfaces (Mitsuba 3's plugins);
+- `_principled`: the principled (Disney) BSDF as Mitsuba 3 implements it;
 - `_properties`: absorptance from eq. 3.2, the flux-weighted -ances of table 3.1, slab and
   thick-layer properties and the -ivities of the glossary;
 - `_reflectance`: the reflectance quantities of table 3.2 by Monte Carlo.

@@ -24,7 +24,7 @@ and rejects everything else with an error that names the file, the line and the 
   degrees), `scale`, `lookat` (`origin`, `target`, `up`), applied in document order.
 - `bsdf`: every plugin of `radiometria.render._registry.MATERIALS` (`diffuse`,
   `roughdiffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
-  `roughplastic`, `thindielectric`, `null`, ...) with the parameters it declares, and
+  `roughplastic`, `thindielectric`, `null`, `principled`, ...) with the parameters it declares, and
   `twosided` (one nested BSDF); an `id` makes it referable by `ref`. Composites nest other
   BSDFs (inline `<bsdf>` or `<ref id>`, in order): `blendbsdf` (two, and a `weight`, a number
   or a texture), `mask` (one, `opacity`, default 0.5; Mitsuba's `twosided` may not wrap it,
@@ -40,7 +40,9 @@ and rejects everything else with an error that names the file, the line and the 
   `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
   `roughconductor` `specular_reflectance`; `roughconductor` and `roughdielectric` `alpha`,
   `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`; `normalmap`, `bumpmap`;
-  `spot` `texture`. Scalar parameters (roughness, weight, opacity) use the texels'
+  `spot` `texture`; `principled` `base_color` and every scalar Mitsuba reads as a texture
+  (`roughness`, `metallic`, `spec_trans`, `clearcoat`, ...; not `eta`, `specular`).
+  Scalar parameters (roughness, weight, opacity) use the texels'
   luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables depend on it).
 - `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,
   diagonal, as Mitsuba), `to_world`, `near_clip`, `far_clip`; `thinlens` with those and
