@@ -25,7 +25,7 @@ import os
 import sys
 from pathlib import Path
 
-from ._timing import TIMING_ENV, mark
+from ._timing import TIMING_ENV, mark, timing_enabled
 
 __all__ = ["main"]
 
@@ -99,9 +99,76 @@ def _lut_check(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
+    """`radiometria render`: from the step cache when it holds this render (a warm start that
+    imports neither the renderer nor its plugins, `radiometria._warmstart`), else through the
+    renderer, which writes the entry for the next time."""
+    from . import _warmstart as warm
+
+    step_cache = None
+    if not (args.no_cache or warm.cache_disabled() or args.resume or args.preview_every):
+        opts = warm.render_settings(args)  # bad arguments fail here, before any lookup
+        if not opts.spectral:
+            options = {
+                "width": opts.width,
+                "height": opts.height,
+                "integrator": args.integrator,
+                "sampler": args.sampler,
+                "max_depth": opts.max_depth,
+                "defines": sorted(opts.defines.items()),
+            }
+            if timing_enabled():
+                warm.jax_activity.start()
+            request = warm.render_request(str(args.scene), options)
+            directory = warm.cache_root() / "jax"  # beside JAX's compiled programs
+            entry = warm.load_entry(directory, request)
+            mark("step cache " + ("entry loaded" if entry else "missed"))
+            if entry is not None:
+                return _render_from_entry(args, opts, entry)
+            step_cache = (directory, request)
     from .render._cli import render_command
 
-    return render_command(args)
+    return render_command(args, step_cache=step_cache)
+
+
+def _render_from_entry(args: argparse.Namespace, opts, entry) -> int:
+    """Render from a step entry and write the image as `render_command` does."""
+    from . import _warmstart as warm
+
+    identity = {**entry.meta["identity"], "seed": opts.seed, "spp": opts.spp}
+
+    def on_checkpoint(xyz_sum, weight_sum, done):
+        from .render._cli import save_checkpoint  # costs the renderer's import, once
+
+        save_checkpoint(opts.checkpoint, xyz_sum, weight_sum, done, identity)
+
+    image, reached, stopped = warm.run_entry(
+        entry,
+        spp=opts.spp,
+        seed=opts.seed,
+        checkpoint_every=args.checkpoint_every,
+        on_checkpoint=on_checkpoint,
+    )
+    mark("rendered" + warm.jax_activity.summary())
+    from .camera import write_exr, write_png
+
+    settings = dict(scene=str(args.scene), spp=opts.spp, seed=opts.seed)
+    out = opts.out
+    if stopped is not None:
+        meta = {**settings, "spp_reached": int(reached)}
+        write_exr(out, image, meta) if out.suffix.lower() == ".exr" else write_png(out, image)
+        print(
+            f"radiometria: interrupted by {stopped} at {reached} of {opts.spp} spp; partial "
+            f"image {out}; checkpoint {opts.checkpoint} (continue with --resume)",
+            file=sys.stderr,
+        )
+        return 130 if stopped == "SIGINT" else 143
+    meta = {**entry.meta["metadata"], **settings, "spp_reached": int(opts.spp)}
+    write_exr(out, image, meta) if out.suffix.lower() == ".exr" else write_png(out, image)
+    mark("image written")
+    if not args.checkpoint and opts.checkpoint.exists():
+        opts.checkpoint.unlink()  # the default checkpoint of a finished render is not needed
+    print(out)
+    return 0
 
 
 def _cache_info(args: argparse.Namespace) -> int:
@@ -250,7 +317,13 @@ def main(argv: list[str] | None = None) -> int:
         os.environ[TIMING_ENV] = "1"
     mark("arguments parsed")
     try:
-        if getattr(args, "uses_jax", True) and not args.no_cache:
+        if getattr(args, "uses_jax", True) and not args.no_cache and args.func is _render:
+            from ._warmstart import cache_disabled, cache_root, enable_jax_cache
+
+            if not cache_disabled():  # the renderer is imported only if the step cache misses
+                enable_jax_cache(cache_root() / "jax")
+            mark("imports (jax) and the compilation cache")
+        elif getattr(args, "uses_jax", True) and not args.no_cache:
             from .render import enable_compilation_cache
 
             enable_compilation_cache()

@@ -7,6 +7,7 @@ import sys
 import numpy as np
 import pytest
 
+from radiometria import _warmstart
 from radiometria.camera import read_exr
 from radiometria.cli import main
 from radiometria.render import _cache, render
@@ -17,9 +18,12 @@ RENDER = ["render", "cornell-box", "--width", "16", "--height", "16", "--spp", "
 
 
 @pytest.fixture(autouse=True)
-def _compilation_cache_off(monkeypatch):
-    """Commands run in this process leave its JAX configuration as it is."""
+def _compilation_cache_off(monkeypatch, tmp_path):
+    """Commands run in this process leave its JAX configuration as it is, and keep their
+    step entries in a temporary directory."""
     monkeypatch.setattr(_cache, "enable_compilation_cache", lambda *args, **kwargs: None)
+    monkeypatch.setattr(_warmstart, "enable_jax_cache", lambda *args, **kwargs: None)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
 
 
 def test_rendering_does_not_import_the_fitter():

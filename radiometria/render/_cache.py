@@ -14,18 +14,21 @@ cacheable.
 """
 
 import contextlib
-import os
-import threading
 from dataclasses import dataclass
 from pathlib import Path
 
 import equinox as eqx
 import equinox._errors as _eqx_errors
-import jax
-import jax.monitoring
-from jax.experimental.compilation_cache import compilation_cache as _jax_cache
 
-from .._timing import mark
+from .._warmstart import (
+    NO_CACHE_ENV as NO_CACHE_ENV,
+    cache_disabled,
+    cache_root,
+    enable_jax_cache,
+    jax_activity as jax_activity,
+    step_cache_clear,
+    step_cache_info,
+)
 
 __all__ = [
     "CompilationCacheInfo",
@@ -38,7 +41,6 @@ __all__ = [
     "jax_activity",
 ]
 
-NO_CACHE_ENV = "RADIOMETRIA_NO_CACHE"
 # Files of JAX's file-system cache: "<module>-<sha256>-cache" (and "-atime" with eviction).
 _ENTRY_SUFFIXES = ("-cache", "-atime")
 
@@ -54,16 +56,13 @@ def compilation_cache_dir() -> Path:
     ??? cite "References"
         `Jakob2022` (Mitsuba 3 keeps Dr.Jit's compiled kernels on disk in the same way).
     """
-    base = os.environ.get("XDG_CACHE_HOME") or ""
-    # XDG: a relative $XDG_CACHE_HOME is invalid and must be ignored.
-    root = Path(base) if os.path.isabs(base) else Path.home() / ".cache"
-    return root / "radiometria" / "jax"
+    return cache_root() / "jax"
 
 
 def compilation_cache_disabled() -> bool:
     """Whether the environment turns the cache off: `RADIOMETRIA_NO_CACHE` set to anything but
     `""`, `0`, `false` or `no`."""
-    return os.environ.get(NO_CACHE_ENV, "").strip().lower() not in ("", "0", "false", "no")
+    return cache_disabled()
 
 
 def enable_compilation_cache(path=None, *, min_compile_time_s: float = 0.0) -> Path | None:
@@ -96,19 +95,7 @@ def enable_compilation_cache(path=None, *, min_compile_time_s: float = 0.0) -> P
         return None
     if not min_compile_time_s >= 0:
         raise ValueError(f"`min_compile_time_s` must be >= 0 [s], got {min_compile_time_s}.")
-    path = Path(compilation_cache_dir() if path is None else path).expanduser().absolute()
-    try:
-        path.mkdir(parents=True, exist_ok=True, mode=0o700)
-    except OSError as err:
-        raise OSError(
-            f"Cannot create the compilation cache directory {str(path)!r}: {err.strerror or err}."
-        ) from None
-    if jax.config.jax_compilation_cache_dir != str(path):
-        _jax_cache.reset_cache()  # JAX opens its cache once per process; reopen it at the new path
-    jax.config.update("jax_compilation_cache_dir", str(path))
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", float(min_compile_time_s))
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-    return path
+    return enable_jax_cache(compilation_cache_dir() if path is None else path, min_compile_time_s)
 
 
 @dataclass(frozen=True)
@@ -119,7 +106,9 @@ class CompilationCacheInfo:
 
     - `path`: the directory.
     - `entries`: compiled programs stored. [1]
-    - `size_bytes`: their total size. [B]
+    - `size_bytes`: their total size, step entries included. [B]
+    - `steps`: step entries of the command line's warm start (`radiometria._warmstart`:
+        a render's serialised step and scene arrays). [1]
 
     ??? cite "References"
         `Jakob2022` (Dr.Jit's on-disk kernel cache).
@@ -128,6 +117,7 @@ class CompilationCacheInfo:
     path: Path
     entries: int
     size_bytes: int
+    steps: int = 0
 
 
 def _entries(path: Path) -> list[Path]:
@@ -153,14 +143,17 @@ def compilation_cache_info(path=None) -> CompilationCacheInfo:
     path = Path(compilation_cache_dir() if path is None else path).expanduser()
     files = _entries(path)
     programs = [p for p in files if p.name.endswith("-cache")]
-    return CompilationCacheInfo(path, len(programs), sum(p.stat().st_size for p in files))
+    steps, step_bytes = step_cache_info(path)
+    size = sum(p.stat().st_size for p in files) + step_bytes
+    return CompilationCacheInfo(path, len(programs), size, steps)
 
 
 def clear_compilation_cache(path=None) -> int:
     """Delete the compiled programs of a cache directory.
 
-    Only JAX's cache files (`<name>-<hash>-cache` and `-atime`) are removed, so pointing `path`
-    at the wrong directory deletes nothing else; the directory itself stays.
+    Only JAX's cache files (`<name>-<hash>-cache` and `-atime`) and the command line's step
+    entries (`step-<hash>.npz`, `radiometria._warmstart`) are removed, so pointing `path` at
+    the wrong directory deletes nothing else; the directory itself stays.
 
     **Arguments:**
 
@@ -181,6 +174,7 @@ def clear_compilation_cache(path=None) -> int:
         except FileNotFoundError:  # another process removed it first
             continue
         removed += p.name.endswith("-cache")
+    step_cache_clear(path)
     return removed
 
 
@@ -220,55 +214,3 @@ def checks_without_callbacks():
         yield
     finally:
         _eqx_errors.branched_error_if_impl_jit = default
-
-
-# JAX's monitoring events (jax._src.dispatch, jax._src.compiler): Python tracing of a jitted
-# function, its lowering to StableHLO, XLA's compilation, and a load from the persistent cache.
-_TRACE_EVENT = "/jax/core/compile/jaxpr_trace_duration"
-_LOWER_EVENT = "/jax/core/compile/jaxpr_to_mlir_module_duration"
-_COMPILE_EVENT = "/jax/core/compile/backend_compile_duration"
-_CACHE_LOAD_EVENT = "/jax/compilation_cache/cache_retrieval_time_sec"
-_KINDS = {_TRACE_EVENT: "traced", _LOWER_EVENT: "lowered", _COMPILE_EVENT: "compiled",
-          _CACHE_LOAD_EVENT: "loaded from the cache"}  # fmt: skip
-
-
-class _JaxActivity:
-    """Counts and seconds of JAX's tracing, lowering, compiling and cache loads since the last
-    `summary()`; events longer than `loud_s` are marked (`radiometria._timing.mark`) as they
-    end, so the first render step's trace and compile or load show with timestamps."""
-
-    loud_s = 0.05  # s
-
-    def __init__(self):
-        self._lock = threading.Lock()
-        self._counts: dict[str, list] = {}
-        self._registered = False
-
-    def start(self) -> None:
-        with self._lock:
-            if not self._registered:
-                jax.monitoring.register_event_duration_secs_listener(self._on_duration)
-                self._registered = True
-
-    def _on_duration(self, event: str, duration: float, **kwargs) -> None:
-        kind = _KINDS.get(event)
-        if kind is None:
-            return
-        with self._lock:
-            count = self._counts.setdefault(kind, [0, 0.0])
-            count[0] += 1
-            count[1] += duration
-        if duration >= self.loud_s:
-            name = kwargs.get("fun_name")
-            mark(f"  jax: {kind} {name + ' ' if name else ''}in {duration:.3f} s")
-
-    def summary(self) -> str:
-        """`"jax: 12 traced 0.210 s, ..."` since the last summary (empty if nothing ran)."""
-        with self._lock:
-            counts, self._counts = self._counts, {}
-        parts = [f"{n} {kind} {s:.3f} s" for kind, (n, s) in counts.items()]
-        return f"  [jax: {', '.join(parts)}]" if parts else ""
-
-
-jax_activity = _JaxActivity()
-"""The process's `_JaxActivity` recorder (`start()` registers it with `jax.monitoring`)."""

@@ -9,12 +9,19 @@ in the OpenEXR layout of Fichet et al. (2021) (`radiometria.camera.write_spectra
 
 import argparse
 import importlib.metadata
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 from .._timing import mark, timing_enabled
+from .._warmstart import (
+    MAX_IMAGE_SIDE as MAX_IMAGE_SIDE,
+    check_int as _check_int,
+    check_output as _check_output,
+    parse_defines as _defines,
+    recording_opened_files,
+    render_settings,
+    save_entry,
+)
 from ..camera import write_exr, write_png, write_spectral_exr
 from ._cache import (
     checks_without_callbacks,
@@ -37,50 +44,7 @@ __all__ = [
     "render_command",
 ]
 
-MAX_IMAGE_SIDE = 16384  # px: the command line refuses larger images (the library checks memory)
 SPECTRAL_BINS = 47  # --spectral: 10 nm bins over [360, 830] nm
-_FORMATS = (".exr", ".png")
-
-
-def _check_output(path: Path) -> Path:
-    """The output must be .exr/.png in an existing, writable directory (probed, then removed)."""
-    path = Path(path)
-    if path.suffix.lower() not in _FORMATS:
-        got = path.suffix or "no extension"
-        raise ValueError(f"Output {str(path)!r} must end in .exr or .png (got {got!r}).")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise OSError(f"Cannot write {str(path)!r}: directory {str(parent)!r} does not exist.")
-    if path.is_dir():
-        raise OSError(f"Cannot write {str(path)!r}: it is a directory.")
-    try:
-        fd, probe = tempfile.mkstemp(prefix=".radiometria-probe-", dir=parent)
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as err:
-        raise OSError(f"Cannot write {str(path)!r}: {err.strerror or err}.") from None
-    if path.exists() and not os.access(path, os.W_OK):
-        raise OSError(f"Cannot write {str(path)!r}: the file is not writable.")
-    return path
-
-
-def _check_int(value, name: str, low: int, high: int | None = None) -> int | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise TypeError(f"--{name.replace('_', '-')} must be an integer, got {value!r}.")
-    if value < low or (high is not None and value > high):
-        bound = f">= {low}" if high is None else f"in [{low}, {high}]"
-        raise ValueError(f"--{name.replace('_', '-')} must be {bound}, got {value}.")
-    return value
-
-
-def _is_spectral(path: Path, spectral: bool) -> bool:
-    """Whether the output is a spectral EXR (`--spectral` or a name ending `.spectral.exr`)."""
-    named = path.name.lower().endswith(".spectral.exr")
-    if (spectral or named) and path.suffix.lower() != ".exr":
-        raise ValueError(f"--spectral writes OpenEXR: output {str(path)!r} must end in .exr.")
-    return spectral or named
 
 
 def _write(path: Path, rgb, metadata: dict) -> Path:
@@ -104,17 +68,6 @@ def _integrator(description, name: str | None, max_depth: int | None) -> Abstrac
         raise ValueError(msg) from None
 
 
-def _defines(items) -> dict[str, str]:
-    """`-D name=value` options as a dict (Mitsuba's flag for `<default>` parameters)."""
-    out = {}
-    for item in items or ():
-        name, sep, value = str(item).partition("=")
-        if not sep or not name.strip() or any(c.isspace() or c == "$" for c in name):
-            raise ValueError(f"-D expects NAME=VALUE (e.g. -D spp=64), got {item!r}.")
-        out[name] = value
-    return out
-
-
 def _render_to(
     scene_name: str,
     *,
@@ -127,10 +80,12 @@ def _render_to(
     sampler=None,
     progress=True,
     defines=None,
+    step_cache=None,
     **long_render,
 ):
     """Render a scene as the command line does; `long_render` are `render`'s checkpoint and
-    preview arguments, `defines` the `-D name=value` parameters of an XML scene."""
+    preview arguments, `defines` the `-D name=value` parameters of an XML scene, `step_cache`
+    `(directory, request)` to write the render's step entry (`radiometria._warmstart`)."""
     if sampler is not None and sampler not in SAMPLERS:
         raise ValueError(f"--sampler must be one of {sorted(SAMPLERS)}, got {sampler!r}.")
     params = _defines(defines)
@@ -142,18 +97,39 @@ def _render_to(
     if timing_enabled():
         jax_activity.start()
         mark("command checked" + jax_activity.summary())
-    description = load_scene(scene_name, params=params or None)
-    mark("scene loaded" + jax_activity.summary())
-    chosen = _integrator(description, integrator, max_depth)
-    # --sampler, else the file's sampler, else the one with the lowest error per unit time.
-    chosen_sampler = (
-        scene_sampler(description, default="sobol") if sampler is None else SAMPLERS[sampler]()
-    )
-    # Compiled here rather than in `render`, as `render` would (the loader has checked the
-    # values: no host callbacks, `_cache.py`), so that the timing sees the phase.
-    with checks_without_callbacks():
-        scene, camera, rfilter = compile_scene(description, width=width, height=height)
+    with recording_opened_files() as read:  # what the scene reads: the step entry checks it
+        description = load_scene(scene_name, params=params or None)
+        mark("scene loaded" + jax_activity.summary())
+        chosen = _integrator(description, integrator, max_depth)
+        # --sampler, else the file's sampler, else the one with the lowest error per unit time.
+        chosen_sampler = (
+            scene_sampler(description, default="sobol") if sampler is None else SAMPLERS[sampler]()
+        )
+        # Compiled here rather than in `render`, as `render` would (the loader has checked the
+        # values: no host callbacks, `_cache.py`), so that the timing sees the phase.
+        with checks_without_callbacks():
+            scene, camera, rfilter = compile_scene(description, width=width, height=height)
     mark("scene compiled" + jax_activity.summary())
+    metadata = {
+        "software": f"radiometria {importlib.metadata.version('radiometria')}",
+        "scene": str(scene_name),
+        "spp": int(spp),
+        "seed": int(seed),
+        "integrator": chosen.NAME,
+        "sampler": chosen_sampler.NAME,
+        "colorspace": "linear sRGB (Rec. 709 primaries, D65)",
+    }
+    if max_depth is not None:
+        metadata["max_depth"] = int(max_depth)
+    if step_cache is not None:
+        directory, request = step_cache
+
+        def save(*, meta, **entry):
+            save_entry(
+                directory, request, meta={**meta, "metadata": metadata}, dependencies=read, **entry
+            )
+
+        long_render["_step_cache"] = save
     rgb = render(
         scene,
         camera=camera,
@@ -166,21 +142,10 @@ def _render_to(
         **long_render,
     )
     mark("rendered" + jax_activity.summary())
-    metadata = {
-        "software": f"radiometria {importlib.metadata.version('radiometria')}",
-        "scene": str(scene_name),
-        "spp": int(spp),
-        "seed": int(seed),
-        "integrator": chosen.NAME,
-        "sampler": chosen_sampler.NAME,
-        "colorspace": "linear sRGB (Rec. 709 primaries, D65)",
-    }
-    if max_depth is not None:
-        metadata["max_depth"] = int(max_depth)
     return rgb, metadata
 
 
-def render_command(args: argparse.Namespace) -> int:
+def render_command(args: argparse.Namespace, *, step_cache=None) -> int:
     """Run `radiometria render SCENE --spp N --out FILE [...]`; return the exit status.
 
     Bad arguments raise `ValueError`, `TypeError` or `OSError` (the command turns them into
@@ -190,25 +155,10 @@ def render_command(args: argparse.Namespace) -> int:
     in flight: the checkpoint and the partial image (EXR metadata `spp_reached`) are written,
     and the command exits with 130 or 143 without a traceback.
     """
-    spp = _check_int(args.spp, "spp", 1)
-    width = _check_int(args.width, "width", 1, MAX_IMAGE_SIDE)
-    height = _check_int(args.height, "height", 1, MAX_IMAGE_SIDE)
-    seed = _check_int(args.seed, "seed", 0, 2**31 - 1)
-    max_depth = _check_int(args.max_depth, "max_depth", 1, 1024)
-    out = _check_output(args.out)
-    spectral = _is_spectral(out, bool(getattr(args, "spectral", False)))
-    if spectral and (args.checkpoint or args.resume):
-        raise ValueError(
-            "--spectral cannot be combined with --checkpoint or --resume (checkpoints hold the "
-            "RGB film only)."
-        )
-    for name in ("checkpoint_every", "preview_every"):
-        value = getattr(args, name)
-        if value is not None and not value >= 0:
-            raise ValueError(f"--{name.replace('_', '-')} must be >= 0 [s], got {value}.")
-    checkpoint = (
-        Path(args.checkpoint) if args.checkpoint else out.with_name(out.name + ".checkpoint.npz")
-    )
+    opts = render_settings(args)
+    spp, seed, out, spectral, checkpoint = (
+        opts.spp, opts.seed, opts.out, opts.spectral, opts.checkpoint
+    )  # fmt: skip
     extra = {"spectral_bins": SPECTRAL_BINS} if spectral else {}
     settings = dict(scene=str(args.scene), spp=spp, seed=seed)
 
@@ -219,13 +169,14 @@ def render_command(args: argparse.Namespace) -> int:
         rgb, metadata = _render_to(
             args.scene,
             spp=spp,
-            width=width,
-            height=height,
+            width=opts.width,
+            height=opts.height,
             seed=seed,
-            max_depth=max_depth,
+            max_depth=opts.max_depth,
             integrator=args.integrator,
             sampler=args.sampler,
             defines=getattr(args, "define", None),
+            step_cache=step_cache,
             checkpoint=None if spectral else checkpoint,
             checkpoint_every=args.checkpoint_every,
             resume=args.resume,
@@ -289,12 +240,17 @@ def cache_info_command(args: argparse.Namespace) -> int:
     print(f"compilation cache: {info.path}")
     print(f"state: {state}")
     print(f"programs: {info.entries}")
+    print(f"render steps: {info.steps}")
     print(f"size: {info.size_bytes / 2**20:.1f} MiB")
     return 0
 
 
 def cache_clear_command(args: argparse.Namespace) -> int:
     """Run `radiometria cache clear [--dir DIR]`: delete the compiled programs."""
+    steps = compilation_cache_info(args.dir).steps
     removed = clear_compilation_cache(args.dir)
-    print(f"removed {removed} compiled programs from {args.dir or compilation_cache_dir()}")
+    print(
+        f"removed {removed} compiled programs and {steps} render steps from "
+        f"{args.dir or compilation_cache_dir()}"
+    )
     return 0

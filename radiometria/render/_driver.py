@@ -59,6 +59,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from tqdm import tqdm
 
 from .._checks import check_choice, check_positive_int
+from .._warmstart import exported_caller, exported_step_caller, uses_lapack
 from ..camera import (
     AbstractCamera,
     AbstractFilter,
@@ -73,6 +74,7 @@ from ..camera import (
 )
 from ._cache import checks_without_callbacks
 from ._checkpoint import CheckpointError, load_checkpoint, render_identity, save_checkpoint
+from ._geometry import _native
 from ._integrators import AbstractIntegrator, Path
 from ._registry import INTEGRATORS, SAMPLERS
 from ._render_scene import RenderScene
@@ -425,6 +427,7 @@ def render(
     resume: bool = False,
     preview=None,
     preview_every: float = 60.0,
+    _step_cache=None,
 ):
     r"""Render a scene spectrally into a linear sRGB image (thesis ch. 8-9; eq. 2.35).
 
@@ -583,6 +586,9 @@ def render(
             )
     elif resume:
         raise ValueError("`resume=True` needs `checkpoint`, the file to resume from.")
+    step, develop = _step, _develop
+    if _step_cache is not None and n_proc == 1 and not n_bins:  # the command line's warm start
+        step, develop = _exported_step(_step_cache, kernel, cfg, plan, film, key, return_xyz)
     steps = range(proc + start, plan.n_steps, n_proc)
     bar = _progress_bar(progress, total=n_pixels * spp if n_proc == 1 else None)
     if bar is not None and start:
@@ -601,7 +607,7 @@ def render(
             pixel = np.arange(plan.tile, dtype=np.int32) + np.int32(tile * plan.tile)
             # No host callbacks in the step: it stays cacheable on disk (`_cache.py`).
             with checks_without_callbacks():
-                film = _step(
+                film = step(
                     film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg
                 )
             if serialise or checkpoint is not None or preview is not None:
@@ -637,7 +643,7 @@ def render(
             film = eqx.tree_at(lambda f: f.spectral_sum, film, jnp.sum(part, axis=0))
     if n_bins:
         return _result(film, return_xyz)
-    return _develop(film, "XYZ" if return_xyz else "sRGB")
+    return develop(film, "XYZ" if return_xyz else "sRGB")
 
 
 # One compiled program for the development (op by op, each of its operations would compile).
@@ -832,6 +838,92 @@ def _step(film, kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         footprints, raster, xyz = footprints
         film = _add_splats(film, raster, xyz, kernel.rfilter, cfg.width, film.height)
     return _add_footprints(film, pixel, footprints, cfg.width, film.height)
+
+
+def _exported_step(save, kernel: _Kernel, cfg: _Config, plan: _Plan, film: Film, key, xyz: bool):
+    """The step and the film's development serialised with `jax.export` (the command line's
+    warm start, `radiometria._warmstart`): both are exported, handed to `save(step=...,
+    develop=..., kernel=..., film=..., meta=...)` and returned deserialised, as
+    `(step, develop)` with the signatures of `_step` and `_develop`, so that this render and
+    a later process that loads the entry run the same programs."""
+    kernel_leaves, kernel_def = jax.tree_util.tree_flatten(kernel)
+    film_leaves, film_def = jax.tree_util.tree_flatten(film)
+    kernel_leaves = [jnp.asarray(x) for x in kernel_leaves]
+    n_film, n_kernel = len(film_leaves), len(kernel_leaves)
+    key_data = jax.random.key_data(key)
+
+    def flat_step(*args):
+        f = jax.tree_util.tree_unflatten(film_def, args[:n_film])
+        k = jax.tree_util.tree_unflatten(kernel_def, args[n_film : n_film + n_kernel])
+        kd, spp, pass_start, pixel = args[n_film + n_kernel :]
+        key_ = jax.random.wrap_key_data(kd)
+        out = _step.__wrapped__(f, k, key_, spp, pass_start, pixel, cfg=cfg)
+        return tuple(jax.tree_util.tree_leaves(out))
+
+    def flat_develop(*leaves):
+        space = "XYZ" if xyz else "sRGB"
+        return film_develop(jax.tree_util.tree_unflatten(film_def, leaves), space)
+
+    replicated = NamedSharding(Mesh(np.asarray(cfg.devices), ("pixels",)), P())
+    pixel = jax.ShapeDtypeStruct((plan.tile,), jnp.int32)
+    scalar = jax.ShapeDtypeStruct((), jnp.int32)
+    film_avals = [jax.ShapeDtypeStruct(x.shape, x.dtype, sharding=replicated) for x in film_leaves]
+    kernel_avals = [jax.ShapeDtypeStruct(x.shape, x.dtype) for x in kernel_leaves]
+    key_aval = jax.ShapeDtypeStruct(key_data.shape, key_data.dtype)
+    native = _native._load()
+    targets = sorted(_native._SYMBOLS.values()) if native.ok else []
+    checks = [jax.export.DisabledSafetyCheck.custom_call(t) for t in targets]
+    step_jit = jax.jit(
+        flat_step,
+        in_shardings=(replicated,) * n_film + (None,) * (n_kernel + 4),
+        out_shardings=(replicated,) * n_film,
+    )
+    with checks_without_callbacks():
+        exported = jax.export.export(step_jit, disabled_checks=checks)(
+            *film_avals, *kernel_avals, key_aval, scalar, scalar, pixel
+        )
+        developed = jax.export.export(
+            jax.jit(flat_develop, in_shardings=(replicated,) * n_film), disabled_checks=checks
+        )(*film_avals)
+    module = exported.mlir_module() + developed.mlir_module()
+    used = [t for t in targets if t in module]
+    lapack = uses_lapack(module)
+    meta = {
+        "n_pixels": cfg.n_pixels,
+        "tile": plan.tile,
+        "passes": plan.passes,
+        "n_tiles": plan.n_tiles,
+        "width": cfg.width,
+        "height": cfg.n_pixels // cfg.width,
+        "xyz": bool(xyz),
+        "lapack": lapack,
+        "film_xyz_sum": next(i for i, x in enumerate(film_leaves) if x is film.xyz_sum),
+        "film_weight_sum": next(i for i, x in enumerate(film_leaves) if x is film.weight_sum),
+        "identity": render_identity(
+            kernel, seed=0, spp=1, width=cfg.width, height=film.height, layout=_layout(plan, cfg)
+        ),
+        "native": {"library": native.lib._name, "targets": used} if used else None,
+    }
+    step_blob, develop_blob = exported.serialize(), developed.serialize()
+    save(
+        step=step_blob,
+        develop=develop_blob,
+        kernel=[np.asarray(x) for x in kernel_leaves],
+        film=[np.asarray(x) for x in film_leaves],
+        meta=meta,
+    )
+    call_step = exported_step_caller(step_blob, n_film, lapack=lapack)
+    call_develop = exported_caller(develop_blob, lapack=lapack)
+
+    def step(film, kernel, key, spp, pass_start, pixel, *, cfg):
+        leaves = jax.tree_util.tree_leaves(film)
+        out = call_step(*leaves, *kernel_leaves, key_data, spp, pass_start, pixel)
+        return jax.tree_util.tree_unflatten(film_def, out)
+
+    def develop(film, space):
+        return call_develop(*jax.tree_util.tree_leaves(film))
+
+    return step, develop
 
 
 def _progress_bar(progress: bool, total: int | None):
