@@ -87,7 +87,11 @@ from ._plastic import (
     fresnel_diffuse_reflectance as fresnel_diffuse_reflectance,
     rough_plastic_tables as rough_plastic_tables,
 )
-from ._principled import PrincipledBxDF as PrincipledBxDF, principled_eta as principled_eta
+from ._principled import (
+    PrincipledBxDF as PrincipledBxDF,
+    PrincipledThinBxDF as PrincipledThinBxDF,
+    principled_eta as principled_eta,
+)
 from ._properties import (
     absorptance as absorptance,
     absorptivity as absorptivity,

@@ -59,7 +59,7 @@ from ._directions import _stack3
 from ._fresnel import _fr_dielectric_snell
 from ._microfacet import TrowbridgeReitzDistribution
 
-__all__ = ["PrincipledBxDF", "principled_eta"]
+__all__ = ["PrincipledBxDF", "PrincipledThinBxDF", "principled_eta"]
 
 
 def principled_eta(specular) -> Array:
@@ -442,6 +442,271 @@ class PrincipledBxDF(AbstractBxDF):
             is_delta=jnp.zeros(ok.shape, bool),
             is_transmission=trans,
             eta=jnp.where(trans, eta_eff, 1.0),
+            terminate_secondary=jnp.zeros(ok.shape, bool),
+        )
+        return _failed_or(ok, sample)
+
+
+class PrincipledThinBxDF(AbstractBxDF):
+    r"""The thin principled BSDF, lobe for lobe as Mitsuba 3's `principledthin`: a
+    two-dimensional sheet (leaves, paper, fabric), the same from both sides.
+
+    With `wo` mirrored to +z (and `wi` with it), $h$ the half vector of `wo` and `wi` mirrored
+    to +z, $s_t$ spec_trans and $d = $ diff_trans$/2$:
+
+    - *specular reflection*: $s_t\,F_{thin}\,D\,G/(4\cos\theta_o\cos\theta_i)$, GGX of
+      $\alpha = r^2$, $F_{thin} = \mathrm{lerp}(F_d, F_S(R_0(\eta)\,C/Y), t)$;
+    - *specular transmission*: $s_t\,C\,(1 - F_d)\,D'\,G'/(4\cos\theta_o|\cos\theta_i|)$, the
+      microfacet reflection turned to the other side (no bending in a thin sheet), GGX with
+      the roughness scaled by $0.65\eta - 0.35$ (`Burley2015`, fig. 15);
+    - *diffuse reflection* and *sheen*: as `PrincipledBxDF`, times $(1 - s_t)(1 - d)$;
+    - *diffuse transmission*: $(1 - s_t)\,d\,C/\pi$.
+
+    Lobes are chosen with probabilities $\propto s_t/2, s_t/2, (1 - s_t)(1 - d), (1 - s_t)d$
+    (times Mitsuba's sampling rates); `eta` of a sample is 1 (both sides are the same medium).
+
+    **Fields** (batch shape `(...)`):
+
+    - `base_color`: $C$, `(..., n_lambda)`. [dimensionless]
+    - `roughness`, `anisotropic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`,
+        `flatness`: in [0, 1]; `diff_trans`: in [0, 2] (Mitsuba's range). [dimensionless]
+    - `eta`: index of the sheet's material, > 0 (default 1.5). [dimensionless]
+    - `luminance`: as in `PrincipledBxDF`.
+    - `specular_reflectance_sampling_rate`, `specular_transmittance_sampling_rate`,
+        `diffuse_reflectance_sampling_rate`, `diffuse_transmittance_sampling_rate`:
+        Mitsuba's (default 1). [dimensionless]
+
+    !!! note "Thesis"
+        Eq. 3.4, 3.13-3.18; section 3.1 (diffuse and glossy reflection and transmission).
+
+    ??? cite "References"
+        `Burley2015`; `Jakob2022` (`principledthin`).
+    """
+
+    base_color: Array
+    roughness: Array
+    anisotropic: Array
+    spec_trans: Array
+    diff_trans: Array
+    eta: Array
+    spec_tint: Array
+    sheen: Array
+    sheen_tint: Array
+    flatness: Array
+    luminance: Array
+    specular_reflectance_sampling_rate: Array
+    specular_transmittance_sampling_rate: Array
+    diffuse_reflectance_sampling_rate: Array
+    diffuse_transmittance_sampling_rate: Array
+
+    def __init__(
+        self,
+        base_color=0.5,
+        roughness=0.5,
+        *,
+        anisotropic=0.0,
+        spec_trans=0.0,
+        diff_trans=0.0,
+        eta=1.5,
+        spec_tint=0.0,
+        sheen=0.0,
+        sheen_tint=0.0,
+        flatness=0.0,
+        luminance=None,
+        specular_reflectance_sampling_rate=1.0,
+        specular_transmittance_sampling_rate=1.0,
+        diffuse_reflectance_sampling_rate=1.0,
+        diffuse_transmittance_sampling_rate=1.0,
+    ):
+        c = _spectral(base_color, "base_color")
+        self.base_color = check_in_range(c, "base_color", 0.0, jnp.inf)
+        unit = {
+            "roughness": roughness, "anisotropic": anisotropic, "spec_trans": spec_trans,
+            "spec_tint": spec_tint, "sheen": sheen, "sheen_tint": sheen_tint,
+            "flatness": flatness,
+        }  # fmt: skip
+        for name, value in unit.items():
+            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, 1.0))
+        dt = as_float_array(diff_trans, "diff_trans")
+        self.diff_trans = check_in_range(dt, "diff_trans", 0.0, 2.0)
+        e = as_float_array(eta, "eta")
+        self.eta = check_in_range(e, "eta", 0.0, jnp.inf, closed_lower=False)
+        lum = jnp.mean(self.base_color, axis=-1) if luminance is None else luminance
+        self.luminance = as_float_array(lum, "luminance")
+        rates = {
+            "specular_reflectance_sampling_rate": specular_reflectance_sampling_rate,
+            "specular_transmittance_sampling_rate": specular_transmittance_sampling_rate,
+            "diffuse_reflectance_sampling_rate": diffuse_reflectance_sampling_rate,
+            "diffuse_transmittance_sampling_rate": diffuse_transmittance_sampling_rate,
+        }
+        for name, value in rates.items():
+            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, jnp.inf))
+
+    _SCALARS = (
+        "roughness", "anisotropic", "spec_trans", "diff_trans", "eta", "spec_tint", "sheen",
+        "sheen_tint", "flatness", "luminance", "specular_reflectance_sampling_rate",
+        "specular_transmittance_sampling_rate", "diffuse_reflectance_sampling_rate",
+        "diffuse_transmittance_sampling_rate",
+    )  # fmt: skip
+
+    def _params(self, *items):
+        out = _broadcast(
+            *items, (self.base_color, 1), *((getattr(self, n), 0) for n in self._SCALARS)
+        )[1]
+        k = len(items)
+        return out[:k], dict(zip(("base_color", *self._SCALARS), out[k:], strict=True))
+
+    @staticmethod
+    def _alphas(p, scaled: bool) -> tuple[Array, Array]:
+        r = p["roughness"] * (0.65 * p["eta"] - 0.35) if scaled else p["roughness"]
+        return PrincipledBxDF._alphas({"roughness": r, "anisotropic": p["anisotropic"]})
+
+    @staticmethod
+    def _probabilities(p) -> tuple[Array, Array, Array, Array]:
+        st, dt = p["spec_trans"], 0.5 * p["diff_trans"]
+        p_sr = st * p["specular_reflectance_sampling_rate"] / 2.0
+        p_st = st * p["specular_transmittance_sampling_rate"] / 2.0
+        p_dr = p["diffuse_reflectance_sampling_rate"] * (1.0 - st) * (1.0 - dt)
+        p_dt = p["diffuse_transmittance_sampling_rate"] * (1.0 - st) * dt
+        tot = p_sr + p_st + p_dr + p_dt
+        inv = jnp.where(tot > 0, 1.0 / jnp.where(tot > 0, tot, 1.0), 0.0)
+        return p_sr * inv, p_st * inv, p_dr * inv, p_dt * inv
+
+    @staticmethod
+    def _frame(o: Array, i: Array):
+        """(o, i) mirrored so that o is on +z, the half vector of o and i mirrored to +z."""
+        side = jnp.where(o[..., 2:3] < 0, -1.0, 1.0)
+        o, i = o * side, i * side
+        i_r = jnp.concatenate([i[..., :2], jnp.abs(i[..., 2:])], axis=-1)
+        h, ok = _normalize(o + i_r)
+        return o, i, i_r, h, ok
+
+    @staticmethod
+    def _ggx(h: Array, ax: Array, ay: Array) -> Array:
+        e = (h[..., 0] / ax) ** 2 + (h[..., 1] / ay) ** 2 + h[..., 2] ** 2
+        return 1.0 / (jnp.pi * ax * ay * e * e)
+
+    def _value(self, o: Array, i: Array, p) -> Array:
+        active = o[..., 2] != 0.0
+        o, i, _, h, ok = self._frame(o, i)
+        active = active & ok
+        base = p["base_color"]
+        st, dt, eta = p["spec_trans"], 0.5 * p["diff_trans"], p["eta"]
+        c_o, c_i = o[..., 2], i[..., 2]
+        reflect, refract = c_i > 0, c_i < 0
+        d_o = _dot(o, h)
+        compat_r = (d_o > 0) & (_dot(i, h) > 0)
+        compat_t = (d_o > 0) & (_dot(i, -h) > 0)
+        F = _fr_dielectric_snell(d_o, eta, 1.0 / eta)[0]
+        a_o, a_i = jnp.abs(c_o), jnp.abs(c_i)
+        den = 4.0 * jnp.where(a_o > 0, a_o, 1.0) * jnp.where(a_i > 0, a_i, 1.0)
+        lum = p["luminance"]
+        pos = (lum > 0)[..., None]
+        c_tint = jnp.where(pos, base / jnp.where(pos, lum[..., None], 1.0), 1.0)
+
+        ax, ay = self._alphas(p, scaled=False)
+        g = _smith_g1_ggx(o, h, ax, ay) * _smith_g1_ggx(i, h, ax, ay)
+        r0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+        tint = p["spec_tint"][..., None]
+        f_thin = F[..., None] * (1.0 - tint) + tint * _schlick(c_tint * r0[..., None], d_o, eta)
+        spec = (st * self._ggx(h, ax, ay) * g / den)[..., None] * f_thin
+        value = jnp.where((active & (st > 0) & reflect & compat_r)[..., None], spec, 0.0)
+
+        sx, sy = self._alphas(p, scaled=True)
+        g_t = _smith_g1_ggx(o, h, sx, sy) * _smith_g1_ggx(i, h, sx, sy)
+        trans = base * (st * (1.0 - F) * self._ggx(h, sx, sy) * g_t / den)[..., None]
+        value = value + jnp.where((active & refract & (st > 0) & compat_t)[..., None], trans, 0.0)
+
+        diff_on = active & reflect & (st < 1.0) & (dt < 1.0)
+        w_i, w_o = _schlick_weight(a_i), _schlick_weight(a_o)
+        f_diff = (1.0 - 0.5 * w_o) * (1.0 - 0.5 * w_i)
+        cos_d = _dot(h, i)
+        rr = 2.0 * p["roughness"] * cos_d * cos_d
+        f_retro = rr * (w_i + w_o + w_i * w_o * (rr - 1.0))
+        f_ss = (1.0 + (rr / 2.0 - 1.0) * w_i) * (1.0 + (rr / 2.0 - 1.0) * w_o)
+        f_ss = 1.25 * (f_ss * (1.0 / jnp.where(a_o + a_i > 0, a_o + a_i, 1.0) - 0.5) + 0.5)
+        flat = p["flatness"]
+        lobe = (f_diff + f_retro) * (1.0 - flat) + f_ss * flat
+        weight = (1.0 - st) * (1.0 - dt)
+        diffuse = base * (weight * lobe / jnp.pi)[..., None]
+        c_sheen = 1.0 + (c_tint - 1.0) * p["sheen_tint"][..., None]
+        sheen = (p["sheen"] * weight * _schlick_weight(jnp.abs(cos_d)))[..., None] * c_sheen
+        value = value + jnp.where(diff_on[..., None], diffuse + sheen, 0.0)
+
+        dt_on = active & refract & (st < 1.0) & (dt > 0.0)
+        value = value + jnp.where(dt_on[..., None], base * ((1.0 - st) * dt / jnp.pi)[..., None], 0)
+        return jnp.where(active[..., None], value, 0.0)
+
+    def _pdf(self, o: Array, i: Array, p) -> Array:
+        active = o[..., 2] != 0.0
+        o, i, i_r, h, ok = self._frame(o, i)
+        active = active & ok
+        reflect, refract = i[..., 2] > 0, i[..., 2] < 0
+        p_sr, p_st, p_dr, p_dt = self._probabilities(p)
+        d_o = _dot(o, h)
+        compat_r = (d_o > 0) & (_dot(i, h) > 0) & reflect
+        compat_t = (d_o > 0) & (_dot(i, -h) > 0) & refract
+        dwh = jnp.abs(safe_div(jnp.ones_like(d_o), 4.0 * _dot(i_r, h)))
+
+        def visible(ax, ay):
+            vis = self._ggx(h, ax, ay) * _smith_g1_ggx(o, h, ax, ay) * jnp.abs(d_o)
+            return safe_div(vis, o[..., 2])
+
+        pdf = jnp.where(compat_r, p_sr * visible(*self._alphas(p, False)) * dwh, 0.0)
+        pdf = pdf + jnp.where(compat_t, p_st * visible(*self._alphas(p, True)) * dwh, 0.0)
+        pdf = pdf + jnp.where(reflect, p_dr * i[..., 2] / jnp.pi, 0.0)
+        pdf = pdf + jnp.where(refract, -p_dt * i[..., 2] / jnp.pi, 0.0)
+        return jnp.where(active, pdf, 0.0)
+
+    def f(self, wo, wi, *, mode: str = "radiance") -> Array:
+        _check_mode(mode)  # a thin sheet bends no light: both modes agree
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        (wo, wi), p = self._params((wo, 1), (wi, 1))
+        return self._value(wo, wi, p)
+
+    def pdf(self, wo, wi) -> Array:
+        wo, wi = _dirs(("wo", wo), ("wi", wi))
+        (wo, wi), p = self._params((wo, 1), (wi, 1))
+        return self._pdf(wo, wi, p)
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        _check_mode(mode)
+        (wo,) = _dirs(("wo", wo))
+        u_lobe = as_float_array(u_lobe, "u_lobe")
+        u2 = _u2(u2)
+        (o, u, u2), p = self._params((wo, 1), (u_lobe, 0), (u2, 1))
+        side = jnp.where(o[..., 2:3] < 0, -1.0, 1.0)
+        up = o * side
+        p_sr, p_st, p_dr, _ = self._probabilities(p)
+        spec_r = u < p_sr
+        spec_t = ~spec_r & (u < p_sr + p_st)
+        diff_r = ~spec_r & ~spec_t & (u < p_sr + p_st + p_dr)
+        glossy = spec_r | spec_t
+        ax, ay = self._alphas(p, False)
+        sx, sy = self._alphas(p, True)
+        ax, ay = jnp.where(spec_t, sx, ax), jnp.where(spec_t, sy, ay)
+        m = TrowbridgeReitzDistribution(ax, ay).sample_wm(up, u2)
+        w = 2.0 * _dot(up, m)[..., None] * m - up
+        w = jnp.where(spec_t[..., None], jnp.concatenate([w[..., :2], -w[..., 2:]], axis=-1), w)
+        x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
+        cos_dir = _stack3(x, y, jnp.where(diff_r, z, -z))
+        wi_up = jnp.where(glossy[..., None], w, cos_dir)
+        compat = (_dot(up, m) > 0) & jnp.where(
+            spec_t,
+            (_dot(wi_up, -m) > 0) & (wi_up[..., 2] < 0),
+            (_dot(wi_up, m) > 0) & (wi_up[..., 2] > 0),
+        )
+        wi = wi_up * side
+        pdf = self._pdf(o, wi, p)
+        ok = (o[..., 2] != 0) & (~glossy | compat) & (pdf > 0)
+        trans = wi[..., 2] * o[..., 2] < 0
+        sample = BSDFSample(
+            f=self._value(o, wi, p),
+            wi=wi,
+            pdf=pdf,
+            is_delta=jnp.zeros(ok.shape, bool),
+            is_transmission=trans,
+            eta=jnp.ones_like(pdf),
             terminate_secondary=jnp.zeros(ok.shape, bool),
         )
         return _failed_or(ok, sample)
