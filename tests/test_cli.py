@@ -75,7 +75,7 @@ def test_render_sampler_and_integrator_flags(tmp_path):
 
 @pytest.mark.parametrize(
     ("extra", "message"),
-    [(["--sampler", "halton"], "--sampler"), (["--integrator", "pssmlt"], "--integrator")],
+    [(["--sampler", "halton"], "--sampler"), (["--integrator", "erpt"], "--integrator")],
 )
 def test_render_rejects_unknown_plugin_names(tmp_path, capsys, extra, message):
     out = tmp_path / "x.exr"

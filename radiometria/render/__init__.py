@@ -4,7 +4,7 @@ Every renderer concept is an abstract `equinox` Module with final implementation
 file, in a folder that shows the architecture (the model of diffrax's `_solver/`):
 
 - `_integrators/`: `AbstractIntegrator` (`Path`, `Direct`, `VolPath`, `VolPathMIS`, `PTracer`,
-  `BDPT`);
+  `BDPT`, `PSSMLT`);
 - `_samplers/`: `AbstractSampler` (`Independent`, `OwenSobol`);
 - `_materials/`: `AbstractMaterial`, BSDF plugins that build `radiometria.scattering` BxDFs
   (`Diffuse`, `OrenNayar`, `Conductor`, `RoughConductor`, `Dielectric`, `RoughDielectric`);
@@ -57,6 +57,7 @@ from ._geometry import (
 )
 from ._integrators import (
     BDPT as BDPT,
+    PSSMLT as PSSMLT,
     AbstractIntegrator as AbstractIntegrator,
     Direct as Direct,
     Path as Path,

@@ -524,6 +524,13 @@ def render(
         )
     integrator = scene_integrator_ if integrator is None else integrator
     sampler = scene_sampler_ if sampler is None else sampler
+    if getattr(integrator, "MARKOV_CHAINS", False):  # `PSSMLT`: chains, not independent steps
+        _check_markov_chain_options(integrator, locals())
+        batch = _default_batch(list(jax.local_devices())) if batch is None else batch
+        return integrator.render_chains(
+            scene, camera, spp=spp, seed=seed, batch=check_positive_int(batch, "batch"),
+            return_xyz=return_xyz,
+        )  # fmt: skip
     n_bins = _check_spectral_bins(spectral_bins, integrator, checkpoint)
     width, height = int(camera.width), int(camera.height)
     n_pixels = width * height
@@ -689,6 +696,21 @@ def _check_spectral_bins(spectral_bins, integrator, checkpoint) -> int:
             "film only); render without a checkpoint."
         )
     return int(spectral_bins)
+
+
+def _check_markov_chain_options(integrator, options: dict) -> None:
+    """A Markov-chain integrator (`PSSMLT`) renders its own film in one program: the step
+    loop's options that would change the image are refused (`checkpoint` and `preview` are
+    not written: there is no step to save or show)."""
+    unsupported = {
+        "resume": False, "spectral_bins": None, "devices": None, "reconstruction": "splat",
+    }  # fmt: skip
+    for name, default in unsupported.items():
+        if options[name] != default:
+            raise ValueError(
+                f"`{name}`={options[name]!r} is not supported with {type(integrator).__name__} "
+                "(its Markov chains render their own box-filtered film); leave it out."
+            )
 
 
 class RenderInterrupted(KeyboardInterrupt):

@@ -16,7 +16,7 @@ from ..camera import (
     ThinLensCamera,
 )
 from ._accelerators import ACCELERATORS
-from ._integrators import BDPT, Direct, Path, PTracer, VolPath, VolPathMIS
+from ._integrators import BDPT, PSSMLT, Direct, Path, PTracer, VolPath, VolPathMIS
 from ._lights import (
     AreaLight,
     ConstantLight,
@@ -75,7 +75,7 @@ LIGHTS = _by_name(
     AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvironmentLight
 )
 # Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
-INTEGRATORS = _by_name(Path, Direct, VolPath, VolPathMIS, PTracer, BDPT)
+INTEGRATORS = _by_name(Path, Direct, VolPath, VolPathMIS, PTracer, BDPT, PSSMLT)
 # Mitsuba 3's `<medium type=...>` names.
 MEDIA = _by_name(HomogeneousMediumPlugin, GridMediumPlugin)
 # `radiometria render --sampler`.

@@ -16,6 +16,7 @@ from ._path import (
     path_radiance as path_radiance,
     sample_dimensions as sample_dimensions,
 )
+from ._pssmlt import PSSMLT as PSSMLT, pssmlt_sample_dimensions as pssmlt_sample_dimensions
 from ._ptracer import (
     PTracer as PTracer,
     Splats as Splats,
