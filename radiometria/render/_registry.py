@@ -36,6 +36,7 @@ from ._materials import (
     OrenNayar,
     Plastic,
     Principled,
+    PrincipledThin,
     RoughConductor,
     RoughDielectric,
     RoughPlastic,
@@ -68,6 +69,7 @@ def _by_name(*plugins) -> dict:
 MATERIALS = _by_name(
     Diffuse, OrenNayar, Conductor, RoughConductor, Dielectric, RoughDielectric, Null,
     Plastic, RoughPlastic, ThinDielectric, BlendBSDF, Mask, Principled,
+    PrincipledThin,
     BumpMap, NormalMap,
 )  # fmt: skip
 # Mitsuba 3's `<emitter type=...>` names.

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from radiometria.render import SceneError, load_scene
-from radiometria.render._materials import MaterialSet, Principled
+from radiometria.render._materials import MaterialSet, Principled, PrincipledThin
 from radiometria.render._spectral import LinearRGB
 from radiometria.render._textures import TextureSpec
 
@@ -32,12 +32,19 @@ def _dirs(n, seed):
     return v.astype(np.float32).astype(np.float64)
 
 
-@pytest.mark.parametrize("row", [0, 1])
-def test_principled_plugin_matches_mitsuba_spectral(row):
-    """f cos and pdf equal Mitsuba's `eval` and `pdf` at four wavelengths of one path."""
+THIN_PARAMS = {
+    "spec_trans": 0.4, "diff_trans": 0.9, "roughness": 0.5, "spec_tint": 0.5, "sheen": 0.7,
+    "sheen_tint": 0.4, "flatness": 0.3, "anisotropic": 0.3, "eta": 1.4,
+}  # fmt: skip
+
+
+@pytest.mark.parametrize(("row", "thin"), [(0, False), (1, False), (0, True)])
+def test_principled_plugin_matches_mitsuba_spectral(row, thin):
+    """f cos and pdf equal Mitsuba's `eval` and `pdf` at four wavelengths of one path
+    (`principled`, and `principledthin` from both sides)."""
     mi.set_variant("scalar_spectral")
-    bsdf = mi.load_dict({"type": "principled", "base_color": {"type": "rgb", "value": COLOR},
-                         **PARAMS})  # fmt: skip
+    kind, params = ("principledthin", THIN_PARAMS) if thin else ("principled", PARAMS)
+    bsdf = mi.load_dict({"type": kind, "base_color": {"type": "rgb", "value": COLOR}, **params})
     wo, wi = _dirs(60, 1), _dirs(60, 2)
     wl = WAVELENGTHS[row]
     ctx, ev, pd = mi.BSDFContext(), [], []
@@ -50,8 +57,11 @@ def test_principled_plugin_matches_mitsuba_spectral(row):
         ev.append(np.array(bsdf.eval(ctx, si, w)))
         pd.append(float(bsdf.pdf(ctx, si, w)))
     ev, pd = np.array(ev), np.array(pd)
-    plugin = Principled.from_properties({"base_color": LinearRGB(COLOR), **PARAMS})
+    plugin = (PrincipledThin if thin else Principled).from_properties(
+        {"base_color": LinearRGB(COLOR), **params}
+    )
     assert np.asarray(plugin.transmissive_rows).tolist() == [True]
+    assert bool(plugin.two_sided[0]) == thin
     n = wo.shape[0]
     b = MaterialSet.from_materials([plugin]).bxdf(
         jnp.zeros(n, jnp.int32), jnp.asarray(np.tile(wl, (n, 1)), jnp.float32), None
@@ -112,7 +122,13 @@ SPHERES = """<shape type="sphere"><point name="center" x="-0.95" y="-0.45" z="0.
         <rgb name="color0" value="0.8, 0.2, 0.1"/><rgb name="color1" value="0.9, 0.9, 0.5"/>
         <transform name="to_uv"><scale x="3" y="3"/></transform></texture>
       <float name="sheen" value="1.0"/><float name="sheen_tint" value="0.6"/>
-      <float name="roughness" value="0.9"/><float name="flatness" value="0.5"/></bsdf></shape>"""
+      <float name="roughness" value="0.9"/><float name="flatness" value="0.5"/></bsdf></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale x="0.45" y="0.6"/><rotate y="1" angle="-60"/>
+      <translate x="1.5" y="0.35" z="-0.2"/></transform>
+    <bsdf type="principledthin"><rgb name="base_color" value="0.3, 0.7, 0.2"/>
+      <float name="diff_trans" value="1.2"/><float name="spec_trans" value="0.3"/>
+      <float name="roughness" value="0.4"/><float name="sheen" value="0.5"/></bsdf></shape>"""
 
 
 def _scene(tmp_path, wrong: bool = False):
@@ -137,7 +153,7 @@ def _scene(tmp_path, wrong: bool = False):
 def test_principled_scene_loads(tmp_path):
     scene = load_scene(_scene(tmp_path))
     kinds = [m.type for m in scene.materials]
-    assert kinds.count("principled") == 4, kinds
+    assert kinds.count("principled") == 4 and kinds.count("principledthin") == 1, kinds
 
 
 def test_principled_texture_for_an_unsupported_parameter_is_refused(tmp_path):

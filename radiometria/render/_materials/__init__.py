@@ -20,7 +20,7 @@ from ._perturbed import (
     PerturbedBxDF as PerturbedBxDF,
 )
 from ._plastic import Plastic as Plastic, RoughPlastic as RoughPlastic
-from ._principled import Principled as Principled
+from ._principled import Principled as Principled, PrincipledThin as PrincipledThin
 from ._rough_conductor import RoughConductor as RoughConductor
 from ._rough_dielectric import RoughDielectric as RoughDielectric
 from ._set import MaterialSet as MaterialSet

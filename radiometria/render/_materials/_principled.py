@@ -3,18 +3,19 @@
 import functools
 from typing import ClassVar
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 from ...colorimetry import get_cmfs
-from ...scattering import PrincipledBxDF, principled_eta
+from ...scattering import PrincipledBxDF, PrincipledThinBxDF, principled_eta
 from ...upsampling import RGBAlbedoSpectrum
 from .._textures import AbstractTexture, ConstantTexture, texture_parameter
 from ._base import AbstractMaterial, Properties, scalar, unknown_parameters
 from ._composite import scalar_texture
 
-__all__ = ["Principled"]
+__all__ = ["Principled", "PrincipledThin"]
 
 # Scalar parameters that Mitsuba reads as textures (`eval_1`), with its defaults.
 _SCALARS = {
@@ -32,7 +33,8 @@ _RATES = {
 @functools.cache
 def _ybar() -> tuple[np.ndarray, np.ndarray]:
     """CIE 1931 ybar on its 1 nm grid (NumPy, once)."""
-    cmfs = get_cmfs("CIE 1931 2 Degree Standard Observer")
+    with jax.ensure_compile_time_eval():  # concrete tables even when first called under jit
+        cmfs = get_cmfs("CIE 1931 2 Degree Standard Observer")
     return np.asarray(cmfs.wavelengths_nm), np.asarray(cmfs.values)[:, 1]
 
 
@@ -163,4 +165,115 @@ class Principled(AbstractMaterial):
             specular_sampling_rate=rates[:, 0],
             clearcoat_sampling_rate=rates[:, 1],
             diffuse_sampling_rate=rates[:, 2],
+        )
+
+
+_THIN_SCALARS = {
+    "roughness": 0.5, "anisotropic": 0.0, "spec_trans": 0.0, "spec_tint": 0.0, "sheen": 0.0,
+    "sheen_tint": 0.0, "flatness": 0.0,
+}  # fmt: skip
+_THIN_RATES = {
+    "specular_reflectance_sampling_rate": 1.0,
+    "specular_transmittance_sampling_rate": 1.0,
+    "diffuse_reflectance_sampling_rate": 1.0,
+    "diffuse_transmittance_sampling_rate": 1.0,
+}
+
+
+class PrincipledThin(AbstractMaterial):
+    """The thin principled BSDF as Mitsuba 3's `principledthin` (`PrincipledThinBxDF`): a
+    two-dimensional sheet, the same from both sides (always two-sided, as in Mitsuba), that
+    transmits when `spec_trans` or `diff_trans` is given.
+
+    **Fields:**
+
+    - `base_color`: as `Principled`. [1]
+    - `roughness`, `anisotropic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`,
+        `flatness`: grey textures in [0, 1]; `diff_trans`: grey texture in [0, 2]; `eta`:
+        grey texture > 0 (default 1.5; a texture too, as in Mitsuba). [1]
+    - `rates`: `(m, 4)` Mitsuba's specular reflection and transmission, diffuse reflection
+        and transmission sampling rates. [1]
+    - `transmits`, `two_sided`: `(m,)` bool.
+
+    !!! note "Thesis"
+        Section 3.1 (diffuse and glossy reflection and transmission), eq. 3.4, 3.13-3.18.
+
+    ??? cite "References"
+        `Burley2015`; `Jakob2022` (`principledthin`).
+    """
+
+    NAME: ClassVar[str] = "principledthin"
+    PARAMETERS: ClassVar[frozenset[str]] = frozenset(
+        {"base_color", "eta", "diff_trans", *_THIN_SCALARS, *_THIN_RATES}
+    )
+    USES_UV: ClassVar[bool] = True
+    base_color: AbstractTexture
+    roughness: AbstractTexture
+    anisotropic: AbstractTexture
+    spec_trans: AbstractTexture
+    spec_tint: AbstractTexture
+    sheen: AbstractTexture
+    sheen_tint: AbstractTexture
+    flatness: AbstractTexture
+    diff_trans: AbstractTexture
+    eta: AbstractTexture
+    rates: Float[Array, "m 4"]
+    transmits: Bool[Array, " m"]
+    two_sided: Bool[Array, " m"]
+
+    @classmethod
+    def from_properties(cls, params: Properties, *, two_sided=True, where="scene"):
+        unknown_parameters(params, cls, where)
+        color = params.get("base_color", 0.5)
+        base = texture_parameter(color, RGBAlbedoSpectrum, "base_color", where)
+        if base is None:
+            base = ConstantTexture.from_values([color], RGBAlbedoSpectrum)
+        scalars = [
+            scalar_texture(params.get(name, default), name, where)
+            for name, default in _THIN_SCALARS.items()
+        ]
+        diff = scalar_texture(params.get("diff_trans", 0.0), "diff_trans", where, upper=2.0)
+        eta = params.get("eta", 1.5)
+        if isinstance(eta, int | float) and not isinstance(eta, bool) and not eta > 0:
+            raise ValueError(f"{where}: parameter 'eta' must be > 0, got {eta}.")
+        eta = scalar_texture(eta, "eta", where, lower=1e-6, upper=float("inf"))
+        rates = []
+        for name, default in _THIN_RATES.items():
+            rate = scalar(params, name, default, where)
+            if not rate >= 0:
+                raise ValueError(f"{where}: parameter {name!r} must be >= 0, got {rate}.")
+            rates.append(rate)
+        transmits = _has(params, "spec_trans") or _has(params, "diff_trans")
+        return cls(
+            base,
+            *scalars,
+            diff,
+            eta,
+            jnp.asarray([rates], jnp.float32),
+            jnp.asarray([transmits], bool),
+            jnp.asarray([True], bool),  # both sides scatter, whatever `twosided` says
+        )
+
+    @property
+    def transmissive_rows(self) -> Bool[Array, " m"]:
+        return self.transmits
+
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
+    ) -> PrincipledThinBxDF:
+        color = self.base_color(row, wavelength_nm, uv)
+        grey = {
+            name: getattr(self, name)(row, wavelength_nm, uv)[..., 0]
+            for name in (*_THIN_SCALARS, "diff_trans", "eta")
+        }
+        rates = self.rates[row]
+        return PrincipledThinBxDF(
+            jnp.clip(color, 0.0, 1.0),
+            grey.pop("roughness"),
+            **grey,
+            luminance=path_luminance(color, wavelength_nm),
+            specular_reflectance_sampling_rate=rates[:, 0],
+            specular_transmittance_sampling_rate=rates[:, 1],
+            diffuse_reflectance_sampling_rate=rates[:, 2],
+            diffuse_transmittance_sampling_rate=rates[:, 3],
         )

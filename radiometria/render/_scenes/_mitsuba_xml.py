@@ -22,13 +22,13 @@ and rejects everything else with an error that names the file, the line and the 
   merged mesh.
 - `transform`: `matrix` (16 values, row-major), `translate`, `rotate` (axis and `angle` in
   degrees), `scale`, `lookat` (`origin`, `target`, `up`), applied in document order.
-- `bsdf`: every plugin of `radiometria.render._registry.MATERIALS` (`diffuse`,
-  `roughdiffuse`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`,
-  `roughplastic`, `thindielectric`, `null`, `principled`, ...) with the parameters it declares, and
-  `twosided` (one nested BSDF); an `id` makes it referable by `ref`. Composites nest other
-  BSDFs (inline `<bsdf>` or `<ref id>`, in order): `blendbsdf` (two, and a `weight`, a number
-  or a texture), `mask` (one, `opacity`, default 0.5; Mitsuba's `twosided` may not wrap it,
-  nor a blend with a transmitting child), `normalmap` (one, a `normalmap` bitmap, give it
+- `bsdf`: every plugin of `radiometria.render._registry.MATERIALS` (`diffuse`, `roughdiffuse`,
+  `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `plastic`, `roughplastic`,
+  `thindielectric`, `null`, `principled`, `principledthin`, ...) with the parameters it
+  declares, and `twosided` (one nested BSDF); an `id` makes it referable by `ref`. Composites
+  nest other BSDFs (inline `<bsdf>` or `<ref id>`, in order): `blendbsdf` (two, and a `weight`,
+  a number or a texture), `mask` (one, `opacity`, default 0.5; Mitsuba's `twosided` may not wrap
+  it, nor a blend with a transmitting child), `normalmap` (one, a `normalmap` bitmap, give it
   `raw=true`) and `bumpmap` (one, a nested unnamed height `<texture>`, `scale`); the last two
   take `flip_invalid_normals` and `use_shadowing_function` (default true, as Mitsuba 3.9).
 - `emitter`: `area` inside a shape; `radiance` as `rgb`, `spectrum` (`value="v"` or
@@ -40,8 +40,9 @@ and rejects everything else with an error that names the file, the line and the 
   `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
   `roughconductor` `specular_reflectance`; `roughconductor` and `roughdielectric` `alpha`,
   `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`; `normalmap`, `bumpmap`;
-  `spot` `texture`; `principled` `base_color` and every scalar Mitsuba reads as a texture
-  (`roughness`, `metallic`, `spec_trans`, `clearcoat`, ...; not `eta`, `specular`).
+  `spot` `texture`; `principled` and `principledthin` `base_color` and every scalar Mitsuba
+  reads as a texture (`roughness`, `metallic`, `spec_trans`, `diff_trans`, ...; a thin
+  sheet's `eta` too, not the principled `eta` or `specular`).
   Scalar parameters (roughness, weight, opacity) use the texels'
   luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables depend on it).
 - `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,

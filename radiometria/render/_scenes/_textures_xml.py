@@ -35,6 +35,9 @@ TEXTURED_PARAMETERS = frozenset(
     | {("principled", n) for n in ("base_color", "roughness", "anisotropic", "metallic",
                                    "spec_trans", "spec_tint", "sheen", "sheen_tint",
                                    "flatness", "clearcoat", "clearcoat_gloss")}
+    | {("principledthin", n) for n in ("base_color", "roughness", "anisotropic", "spec_trans",
+                                       "spec_tint", "sheen", "sheen_tint", "flatness",
+                                       "diff_trans", "eta")}
 )  # fmt: skip
 
 _TEXTURE_PARAMETERS = {
