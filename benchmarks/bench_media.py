@@ -121,6 +121,8 @@ def main(argv=None) -> int:
     parser.add_argument("--target-spp", type=int, default=16, help="Mitsuba spp of the target")
     parser.add_argument("--cache", type=Path, default=ROOT / "out" / "bench_media")
     parser.add_argument("--quick", action="store_true", help="32 x 32, reference 512 spp")
+    parser.add_argument("--scenes", nargs="+", choices=sorted(SCENES), default=sorted(SCENES))
+    parser.add_argument("--no-llvm", action="store_true", help="skip llvm_ad_spectral")
     args = parser.parse_args(argv)
     if args.quick:
         args.size, args.ref_spp, args.spps = 32, 512, [4, 8, 16, 32]
@@ -134,6 +136,8 @@ def main(argv=None) -> int:
     )
     record = {"size": args.size, "ref_spp": args.ref_spp, "scenes": {}}
     for scene, path in _write_scenes(args.cache, args.size).items():
+        if scene not in args.scenes:
+            continue
         ref_path = args.cache / f"mitsuba_ref_{scene}_{args.size}_{args.ref_spp}.npy"
         if ref_path.exists():
             reference = np.load(ref_path)
@@ -147,7 +151,7 @@ def main(argv=None) -> int:
             "radiometria volpath": _ours(path),
             "mitsuba scalar_spectral": _mitsuba(path, "scalar_spectral"),
         }
-        if llvm:
+        if llvm and not args.no_llvm:
             os.environ["DRJIT_LIBLLVM_PATH"] = llvm
             try:
                 renderers["mitsuba llvm_ad_spectral"] = _mitsuba(path, "llvm_ad_spectral")

@@ -49,7 +49,12 @@ from ._estimators import (
     residual_ratio_tracking_transmittance as residual_ratio_tracking_transmittance,
     sample_homogeneous_free_flight as sample_homogeneous_free_flight,
 )
-from ._grid import GridMedium as GridMedium, trilinear_lookup as trilinear_lookup
+from ._grid import (
+    GridMedium as GridMedium,
+    coarse_majorant_grid as coarse_majorant_grid,
+    default_majorant_resolution as default_majorant_resolution,
+    trilinear_lookup as trilinear_lookup,
+)
 from ._henyey_greenstein import HenyeyGreenstein as HenyeyGreenstein
 from ._homogeneous import HomogeneousMedium as HomogeneousMedium
 from ._isotropic import IsotropicPhaseFunction as IsotropicPhaseFunction

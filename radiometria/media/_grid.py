@@ -11,9 +11,17 @@ $((i_x + \frac12)/X, (i_y + \frac12)/Y, (i_z + \frac12)/Z)$, clamped to the oute
 towards the faces (Mitsuba 3's `gridvolume` with `filter_type="trilinear"`, which looks the
 grid up as a clamped texture).
 
-**Majorant.** One grey majorant per path, $\bar\mu = \max d \cdot \max_j s_j$, bounds the
-extinction at every wavelength; tentative collisions of rate $\bar\mu$ are drawn only on the
-part of a segment inside the box.
+**Majorant grid.** The box is split into a coarse grid of cells (`coarse_majorant_grid`:
+about 4 voxels a cell, at most $16^3$ cells, as pbrt-v4's `MajorantGrid`), each holding the
+largest and smallest density its trilinear lookups can return, $\bar d_c$ and $\underline d_c$
+(the extreme voxels of the cell's interpolation support: conservative bounds). A ray walks the
+cells it crosses with a 3-D DDA (`Amanatides1987`) and draws tentative collisions at the
+piecewise-constant grey rate $\bar\mu_c = \bar d_c \max_j s_j$ of the cell it is in: an
+exponential optical depth is used up cell by cell, so crossing a cell costs no density
+lookup, and empty cells ($\bar d_c = 0$) are skipped outright. A one-cell grid
+(`majorant_resolution=1`, or a traced density) is the global majorant
+$\max d\cdot\max_j s_j$. Tentative collisions are drawn only on the part of a segment inside
+the box.
 
 **Free flight (spectral tracking).** At a tentative collision $\mathbf x$ the walk stops with
 probability $P = d(\mathbf x)\,\bar s/\bar\mu$ ($\bar s$ the mean of $s_j$ over the path's
@@ -26,16 +34,19 @@ exactly the weight convention of `HomogeneousMedium` ($E[w_j 1_{event} f(t)] =
 \int_0^{t_{max}} \sigma_{s,j}T_j f\,\mathrm dt$, $E[w_j 1_{no\ event}] = T_j(t_{max})$), and
 for a grey medium it is delta tracking with the weight $\varrho$ at an event and 1 otherwise.
 
-**Transmittance** is estimated by residual ratio tracking about the control extinction
-$\sigma_{c,j} = \min d\cdot s_j$ on the part $L$ of the segment inside the box, with rate
-$\bar\mu_r = (\max d - \min d)\max_j s_j$:
-$\hat T_j = e^{-\sigma_{c,j}L}\prod_i (1 - (\sigma_{t,j}(\mathbf x_i) - \sigma_{c,j})/\bar\mu_r)$
-(`Novak2014`); a constant grid gets the exact transmittance, as a homogeneous medium does.
+**Transmittance** is estimated by residual ratio tracking about the per-cell control
+extinction $\sigma_{c,j} = \underline d_c s_j$, with the cell's rate
+$\bar\mu_{r,c} = (\bar d_c - \underline d_c)\max_j s_j$:
+$\hat T_j = e^{-\int\sigma_{c,j}\,\mathrm dt}\prod_i (1 - (\sigma_{t,j}(\mathbf x_i) -
+\sigma_{c,j})/\bar\mu_{r,c})$ (`Novak2014`; the control's optical depth is summed exactly
+over the cells crossed); a constant grid gets the exact transmittance, as a homogeneous medium
+does, and so does every cell of constant density.
 
 **Variates.** The interface hands one variate per path (`u[:, 0]`, with `u[:, 1]` mixed in
 where given); the tracking steps draw theirs from the hash `pcg4d` of those variates and the
 step number (`Jarzynski2020`), so the same `u` gives the same result. The walks run in a
-`lax.while_loop` until every path has left its segment: no step cap biases them.
+`lax.while_loop` over tentative collisions, each with an inner `lax.while_loop` over the
+cells, until every path has left its segment: no step cap biases them.
 """
 
 import jax
@@ -51,7 +62,12 @@ from ._medium import AbstractMedium, MediumInteraction
 from ._phase import AbstractPhaseFunction
 from ._validation import check_coefficient
 
-__all__ = ["GridMedium", "trilinear_lookup"]
+__all__ = [
+    "GridMedium",
+    "coarse_majorant_grid",
+    "default_majorant_resolution",
+    "trilinear_lookup",
+]
 
 
 def trilinear_lookup(grid: Float[Array, "z y x"], p: Float[Array, "n 3"]) -> Float[Array, " n"]:
@@ -106,6 +122,62 @@ def _box_interval(o_l: Array, w_l: Array) -> tuple[Array, Array]:
     hi = jnp.where(jnp.abs(w_l) > 0, jnp.maximum(ta, tb), jnp.where((o_l >= 0) & (o_l <= 1),
                    jnp.inf, -jnp.inf))  # fmt: skip
     return jnp.max(lo, axis=-1), jnp.min(hi, axis=-1)
+
+
+def _range_reduce(a: np.ndarray, axis: int, lo: np.ndarray, hi: np.ndarray, ufunc, fill):
+    """`ufunc` (np.maximum / np.minimum) of `a` over the index ranges `[lo[c], hi[c]]` along
+    `axis`, one result per `c` (ranges may overlap: interleaved `reduceat` indices)."""
+    pad = [(0, 0)] * a.ndim
+    pad[axis] = (0, 1)
+    a = np.pad(a, pad, constant_values=fill)
+    idx = np.stack([lo, hi + 1], axis=-1).ravel()
+    return np.take(ufunc.reduceat(a, idx, axis=axis), np.arange(0, idx.size, 2), axis=axis)
+
+
+def default_majorant_resolution(shape: tuple[int, int, int]) -> tuple[int, int, int]:
+    """The coarse majorant grid's cells `(Rz, Ry, Rx)` for a density grid of `shape`
+    `(Z, Y, X)`: about 4 voxels per cell, at most 16 per axis (`Pharr2023` uses 16^3)."""
+    return tuple(int(min(16, max(1, -(-n // 4)))) for n in shape)
+
+
+def coarse_majorant_grid(
+    density, resolution: tuple[int, int, int] | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Per-cell bounds `(max, min)` of the trilinear density over a coarse grid of cells.
+
+        The unit box is split into $R_z	imes R_y	imes R_x$ equal cells; cell $c$ along an axis of
+        $N$ voxels spans $[c/R, (c+1)/R]$, where the trilinear lookup (`trilinear_lookup`) touches
+        the voxels $\lfloor cN/R - rac12
+    floor$ to $\lfloor (c+1)N/R - rac12
+    floor + 1$
+        (clamped). A trilinear value is a convex combination of its corner voxels, so the maximum
+        (minimum) of those voxels bounds the density everywhere in the cell from above (below):
+        the bounds are conservative, never just sampled.
+
+        **Arguments:**
+
+        - `density`: concrete voxel grid `(Z, Y, X)`. [1]
+        - `resolution`: cells `(Rz, Ry, Rx)`, each >= 1 (default `default_majorant_resolution`).
+
+        **Returns:**
+
+        `(max_grid, min_grid)`, NumPy arrays of shape `(Rz, Ry, Rx)`. [1]
+
+        ??? cite "References"
+            `Pharr2023` §11.4.3 (`MajorantGrid`); `Novak2014` §4 (per-region majorants).
+    """
+    d = np.asarray(density, np.float64)
+    res = default_majorant_resolution(d.shape) if resolution is None else tuple(resolution)
+    if len(res) != 3 or any(int(r) != r or r < 1 for r in res):
+        raise ValueError(f"`resolution` must be three integers >= 1, got {resolution!r}.")
+    hi_d, lo_d = d, d
+    for axis, (n, r) in enumerate(zip(d.shape, res, strict=True)):
+        c = np.arange(int(r))
+        lo = np.clip((2 * c * n - r) // (2 * r), 0, n - 1)
+        hi = np.clip((2 * (c + 1) * n - r) // (2 * r) + 1, 0, n - 1)
+        hi_d = _range_reduce(hi_d, axis, lo, hi, np.maximum, -np.inf)
+        lo_d = _range_reduce(lo_d, axis, lo, hi, np.minimum, np.inf)
+    return hi_d, lo_d
 
 
 def _uniforms(u: Array, step, n_out: int) -> Array:
@@ -175,6 +247,8 @@ class GridMedium(AbstractMedium):
     albedo_grid: Float[Array, "z2 y2 x2"] | None
     max_density: Float[Array, ""]
     min_density: Float[Array, ""]
+    majorant_grid: Float[Array, "rz ry rx"]
+    minorant_grid: Float[Array, "rz ry rx"]
 
     def __init__(
         self,
@@ -188,6 +262,9 @@ class GridMedium(AbstractMedium):
         *,
         to_local=None,
         min_density=None,
+        majorant_resolution=None,
+        majorant_grid=None,
+        minorant_grid=None,
     ):
         if not isinstance(phase, AbstractPhaseFunction):
             raise TypeError(
@@ -222,6 +299,28 @@ class GridMedium(AbstractMedium):
         self.albedo_grid = albedo_grid
         self.max_density = jnp.max(density) if max_density is None else jnp.asarray(max_density)
         self.min_density = jnp.min(density) if min_density is None else jnp.asarray(min_density)
+        if (majorant_grid is None) != (minorant_grid is None):
+            raise ValueError("give both `majorant_grid` and `minorant_grid`, or neither.")
+        if majorant_grid is not None:
+            majorant_grid, minorant_grid = jnp.asarray(majorant_grid), jnp.asarray(minorant_grid)
+            if majorant_grid.ndim != 3 or minorant_grid.shape != majorant_grid.shape:
+                raise ValueError(
+                    "`majorant_grid` and `minorant_grid` must be (Rz, Ry, Rx) grids of one "
+                    f"shape, got {majorant_grid.shape} and {minorant_grid.shape}."
+                )
+        elif isinstance(density, jax.core.Tracer) or majorant_resolution in (1, (1, 1, 1)):
+            # the global-majorant fallback: one cell
+            majorant_grid = jnp.reshape(self.max_density, (1, 1, 1))
+            minorant_grid = jnp.reshape(self.min_density, (1, 1, 1))
+        else:
+            res = majorant_resolution
+            if isinstance(res, int):
+                res = (res, res, res)
+            hi, lo = coarse_majorant_grid(density, res)
+            majorant_grid = jnp.asarray(hi, density.dtype)
+            minorant_grid = jnp.asarray(lo, density.dtype)
+        self.majorant_grid = majorant_grid
+        self.minorant_grid = minorant_grid
 
     def _spectra(self, wavelength_nm):
         lam = as_float_array(wavelength_nm, "wavelength_nm")
@@ -262,30 +361,78 @@ class GridMedium(AbstractMedium):
         start = jnp.maximum(t0, 0.0)
         stop = jnp.minimum(t1, d)
         s, _ = self._spectra(lam)
-        mu = self.majorant(lam).astype(dtype)
-        sc = jnp.zeros_like(s)
-        if mode == "ratio":  # residual ratio tracking about the control min(d) s_j
-            sc = self.min_density.astype(dtype) * s
-            mu = (self.max_density - self.min_density).astype(dtype) * jnp.max(s, axis=-1)
-        active0 = (stop > start) & (mu > 0)
+        s_max = jnp.max(s, axis=-1)
+        hi_g = self.majorant_grid.astype(dtype)
+        lo_g = self.minorant_grid.astype(dtype)
+        # Tracking rate per cell in density units: max d (spectral tracking) or max d - min d
+        # about the control min d (residual ratio tracking); times s_max it is per length.
+        rate_g = hi_g - lo_g if mode == "ratio" else hi_g
+        ctrl_g = lo_g if mode == "ratio" else jnp.zeros_like(lo_g)
+        res_zyx = self.majorant_grid.shape
+        res = jnp.asarray(res_zyx[::-1], dtype)[None, :]  # (1, 3): Rx, Ry, Rz
+        top = jnp.asarray(res_zyx[::-1], jnp.int32)[None, :] - 1
+        fwd = w_l > 0
+        safe_w = jnp.where(w_l != 0, w_l, 1.0)
+        active0 = (stop > start) & (s_max > 0) & (jnp.max(hi_g) > 0)
+        p0 = o_l + jnp.where(active0, start, 0.0)[:, None] * w_l
+        cell0 = jnp.clip(jnp.floor(p0 * res).astype(jnp.int32), 0, top)
+
+        def cell_value(g, cell):
+            return g[cell[:, 2], cell[:, 1], cell[:, 0]]
+
+        def search(t, cell, tau, ctrl, todo):
+            """DDA: walk the cells until the optical depth `tau` of the tracking rate is used
+            up (a tentative collision at the returned `t`) or the segment ends (`found` False).
+            `ctrl` accumulates the control's density times length."""
+
+            def cond(c):
+                return jnp.any(c[4])
+
+            def body(c):
+                t, cell, tau, ctrl, todo, found = c
+                mu = cell_value(rate_g, cell) * s_max
+                dc = cell_value(ctrl_g, cell)
+                bound = (cell + fwd.astype(jnp.int32)).astype(dtype) / res
+                t_ax = jnp.where(w_l != 0, (bound - o_l) / safe_w, jnp.inf)
+                axis = jnp.argmin(t_ax, axis=-1)
+                seg_end = jnp.minimum(jnp.min(t_ax, axis=-1), stop)
+                seg = jnp.maximum(seg_end - t, 0.0)
+                hit = todo & (mu * seg > tau)
+                t_hit = t + tau / jnp.where(mu > 0, mu, 1.0)
+                cross = todo & ~hit
+                t_new = jnp.where(hit, t_hit, jnp.where(cross, seg_end, t))
+                ctrl = ctrl + jnp.where(todo, dc * (t_new - t), 0.0)
+                tau = jnp.where(cross, tau - mu * seg, tau)
+                on_axis = (jnp.arange(3)[None, :] == axis[:, None]) & cross[:, None]
+                cell_new = cell + jnp.where(on_axis, jnp.where(fwd, 1, -1), 0).astype(jnp.int32)
+                out = jnp.any((cell_new < 0) | (cell_new > top), axis=-1)
+                left = cross & ((seg_end >= stop) | out)
+                cell = jnp.where(left[:, None], cell, cell_new)
+                return t_new, cell, tau, ctrl, todo & ~hit & ~left, found | hit
+
+            init = (t, cell, tau, ctrl, todo, jnp.zeros_like(todo))
+            t, cell, _, ctrl, _, found = lax.while_loop(cond, body, init)
+            return t, cell, ctrl, found
 
         def cond(c):
-            return jnp.any(c[2])
+            return jnp.any(c[3])
 
         def body(c):
-            i, t, active, scattered, weight = c
+            i, t, cell, active, scattered, weight, ctrl = c
             v = _uniforms(u, i, 2)
-            step = -jnp.log1p(-v[:, 0]) / jnp.where(mu > 0, mu, 1.0)
-            t_new = t + step
-            hit = active & (t_new < stop)
-            x = origins + jnp.where(hit, t_new, 0.0)[:, None] * directions
+            tau = -jnp.log1p(-v[:, 0])
+            t, cell, ctrl, hit = search(t, cell, tau, ctrl, active)
+            mu = cell_value(rate_g, cell) * s_max
+            x = origins + jnp.where(hit, t, 0.0)[:, None] * directions
             st, ss = self.coefficients_at(x, lam)
+            mu_s = jnp.where(mu > 0, mu, 1.0)
             if mode == "ratio":
-                factor = 1.0 - (st - sc) / jnp.where(mu > 0, mu, 1.0)[:, None]
+                sc = cell_value(ctrl_g, cell)[:, None] * s
+                factor = 1.0 - (st - sc) / mu_s[:, None]
                 weight = jnp.where(hit[:, None], weight * factor, weight)
                 new_active = hit
             else:
-                p_real = jnp.clip(jnp.mean(st, axis=-1) / jnp.where(mu > 0, mu, 1.0), 0.0, 1.0)
+                p_real = jnp.clip(jnp.mean(st, axis=-1) / mu_s, 0.0, 1.0)
                 real = hit & (v[:, 1] < p_real)
                 w_real = safe_div(ss, (mu * p_real)[:, None])
                 w_null = safe_div(mu[:, None] - st, (mu * (1.0 - p_real))[:, None])
@@ -293,19 +440,20 @@ class GridMedium(AbstractMedium):
                 weight = jnp.where(hit[:, None], weight * factor, weight)
                 scattered = scattered | real
                 new_active = hit & ~real
-            t = jnp.where(hit, t_new, t)
-            return i + 1, t, new_active, scattered, weight
+            return i + 1, t, cell, new_active, scattered, weight, ctrl
 
         init = (
             jnp.asarray(0, jnp.uint32),
             jnp.where(active0, start, 0.0),
+            cell0,
             active0,
             jnp.zeros((n,), bool),
             jnp.ones((n, k), dtype),
+            jnp.zeros((n,), dtype),
         )
-        _, t, _, scattered, weight = lax.while_loop(cond, body, init)
+        _, t, _, _, scattered, weight, ctrl = lax.while_loop(cond, body, init)
         if mode == "ratio":
-            weight = weight * jnp.exp(-sc * jnp.maximum(stop - start, 0.0)[:, None])
+            weight = weight * jnp.exp(-s * ctrl[:, None])
         return t, scattered, weight, d
 
     def transmittance(

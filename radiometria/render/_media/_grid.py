@@ -6,7 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from ...media import GridMedium, HenyeyGreenstein
+from ...media import GridMedium, HenyeyGreenstein, coarse_majorant_grid
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
 from ._base import AbstractMediumPlugin
@@ -88,6 +88,9 @@ class GridMediumPlugin(AbstractMediumPlugin):
     - `to_local`: `(4, 4)` inverse of the grid's `to_world`. [1/scene units]
     - `max_density`, `min_density`: the extreme densities (the majorant's factor and the
         residual-ratio-tracking control's). [1]
+    - `majorant_grid`, `minorant_grid`: `(Rz, Ry, Rx)` conservative per-cell bounds of the
+        density (`radiometria.media.coarse_majorant_grid`, built once here), the cells the
+        tracking walks through. [1]
     - `g`: `(1,)` the phase function's mean cosine. [1]
 
     An RGB `sigma_t` grid must have one chromaticity in every voxel (then Mitsuba's
@@ -111,6 +114,8 @@ class GridMediumPlugin(AbstractMediumPlugin):
     to_local: Float[Array, "4 4"]
     max_density: Float[Array, ""]
     min_density: Float[Array, ""]
+    majorant_grid: Float[Array, "rz ry rx"]
+    minorant_grid: Float[Array, "rz ry rx"]
     g: Float[Array, " 1"]
 
     @classmethod
@@ -152,6 +157,7 @@ class GridMediumPlugin(AbstractMediumPlugin):
         m = _to_world(vol)
         if not np.all(np.isfinite(m)) or abs(np.linalg.det(m[:3, :3])) < 1e-12:
             raise ValueError(f"{where}: the grid's to_world must be finite and invertible.")
+        hi, lo = coarse_majorant_grid(np.asarray(density, np.float32))
         return cls(
             density=jnp.asarray(density, jnp.float32),
             sigma_t=SpectrumTable(jnp.asarray(sigma_t[None], jnp.float32)),
@@ -160,6 +166,8 @@ class GridMediumPlugin(AbstractMediumPlugin):
             to_local=jnp.asarray(np.linalg.inv(m), jnp.float32),
             max_density=jnp.asarray(np.max(density), jnp.float32),
             min_density=jnp.asarray(np.min(density), jnp.float32),
+            majorant_grid=jnp.asarray(hi, jnp.float32),
+            minorant_grid=jnp.asarray(lo, jnp.float32),
             g=jnp.asarray([g], jnp.float32),
         )
 
@@ -179,4 +187,6 @@ class GridMediumPlugin(AbstractMediumPlugin):
             max_density=self.max_density,
             to_local=self.to_local,
             min_density=self.min_density,
+            majorant_grid=self.majorant_grid,
+            minorant_grid=self.minorant_grid,
         )
