@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .._checks import check_choice
 from . import (
+    _bidirectional,
     _camera,
     _colorimetry,
     _media,
@@ -22,8 +23,18 @@ from . import (
 )
 from ._registry import FIGURES as FIGURES, figure as figure, save as save
 
-del _camera, _colorimetry, _media, _montecarlo, _photometry, _radiometry, _render, _scattering
-del _upsampling
+del (
+    _bidirectional,
+    _camera,
+    _colorimetry,
+    _media,
+    _montecarlo,
+    _photometry,
+    _radiometry,
+    _render,
+    _scattering,
+    _upsampling,
+)
 
 
 def make_figures(
