@@ -15,8 +15,9 @@ Cornell box at its own 256 x 256 film (Mitsuba 3's `cornell_box()`; radiometria'
 2. **Start-up** (goal 2): seconds from starting the command to its first render step running
    (the step compiled or loaded from the cache and dispatched), cold and warm, and what
    `radiometria render --help` costs. The warm runs also print where the time went, from
-   the command's own timestamps (`RADIOMETRIA_TIMING=1`): imports, scene compile, the first
-   step's trace + lowering and its load from the cache.
+   the command's own timestamps (`RADIOMETRIA_TIMING=1`): imports, the step entry loaded
+   (`radiometria._warmstart`: the serialised step and the scene's arrays), the step's load
+   from the compilation cache, its first dispatch.
 3. **Warm process** (goal 3): `bench_render.py`'s in-process time to equal error, radiometria
    (Owen-Sobol) against `llvm_ad_spectral`.
 4. **Memory** (goal 5): peak resident memory (`ru_maxrss` of the child, as
@@ -52,25 +53,9 @@ from tests.render._mitsuba import rel_mse  # noqa: E402
 PYTHON = sys.executable
 COMMAND = [str(Path(PYTHON).parent / "radiometria")]
 
-# `radiometria ...` with a timestamp when the first render step has been dispatched (after its
-# compilation or its load from the cache): the same `main` the console script runs.
-_OURS = textwrap.dedent(
-    """
-    import os, sys, time
-    import radiometria.render._driver as driver
-    step = driver._step
-    def first(*args, **kwargs):
-        out = step(*args, **kwargs)
-        if not getattr(first, "done", False):
-            first.done = True
-            t = time.time() - float(os.environ["BENCH_T0"])
-            print(f"BENCH_FIRST_STEP {t:.4f}", file=sys.stderr, flush=True)
-        return out
-    driver._step = first
-    from radiometria.cli import main
-    sys.exit(main(sys.argv[1:]))
-    """
-)
+# `radiometria ...`, the same `main` the console script runs; with `RADIOMETRIA_TIMING=1` it
+# marks "first step dispatched" (after the step's compilation or its load from the cache).
+_OURS = "import sys\nfrom radiometria.cli import main\nsys.exit(main(sys.argv[1:]))\n"
 
 # A user's Mitsuba script: import, load the scene, render, write the image.
 _MITSUBA = textwrap.dedent(
@@ -104,8 +89,8 @@ def _run(argv, env=None):
 
 
 def _first_step(err: str) -> float | None:
-    found = re.findall(r"BENCH_FIRST_STEP ([0-9.]+)", err)  # between tqdm's \r updates
-    return float(found[-1]) if found else None
+    """Seconds from the process's start to its first render step dispatched."""
+    return _phases(err).get("first step dispatched")
 
 
 _MARK = re.compile(r"radiometria timing: +([0-9.]+) s +\+ *([0-9.]+) s +(.*)")
@@ -113,8 +98,10 @@ _MARK = re.compile(r"radiometria timing: +([0-9.]+) s +\+ *([0-9.]+) s +(.*)")
 
 def _phases(err: str) -> dict[str, float]:
     """Seconds since the process started at the end of each start-up phase, from the
-    command's `RADIOMETRIA_TIMING` lines: imports, scene compiled, step lowered (its trace and
-    lowering done), step loaded (from the cache) or compiled, first step dispatched."""
+    command's `RADIOMETRIA_TIMING` lines: imports, step entry loaded (warm start) or missed,
+    scene compiled (without an entry), step traced + lowered (for its export, without an
+    entry), the exported step lowered, loaded from the cache or compiled, first step
+    dispatched."""
     out: dict[str, float] = {}
     for line in err.replace("\r", "\n").splitlines():
         m = _MARK.search(line)
@@ -123,15 +110,16 @@ def _phases(err: str) -> dict[str, float]:
         t, label = float(m[1]), m[3]
         if label.startswith("imports"):
             out["imports"] = t
+        elif label.startswith("step cache"):
+            out[label.split("  [")[0]] = t
         elif label.startswith("scene compiled"):
             out["scene compiled"] = t
-        elif "lowered jit(_step)" in label:
+        elif "lowered jit(flat_step)" in label or "lowered jit(_step)" in label:
             out.setdefault("step traced+lowered", t)
-        elif "compiled jit(_step)" in label:  # after a cache load or an XLA compile
-            out.setdefault("step loaded/compiled", t)
-    first = _first_step(err)
-    if first is not None:
-        out["first step dispatched"] = first
+        elif "compiled jit(call)" in label or "compiled jit(_step)" in label:
+            out.setdefault("step loaded/compiled", t)  # after a cache load or an XLA compile
+        elif label.startswith("first step dispatched"):
+            out.setdefault("first step dispatched", t)
     return out
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from radiometria import _warmstart
 from radiometria.camera import read_exr
 from radiometria.cli import main
 from radiometria.render import _cache
@@ -24,6 +25,7 @@ def _compilation_cache_in_tmp(monkeypatch, tmp_path_factory):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "xdg-cache"))
     monkeypatch.delenv("RADIOMETRIA_NO_CACHE", raising=False)
     monkeypatch.setattr(_cache, "enable_compilation_cache", lambda *args, **kwargs: None)
+    monkeypatch.setattr(_warmstart, "enable_jax_cache", lambda *args, **kwargs: None)
 
 
 def _command() -> list[str]:

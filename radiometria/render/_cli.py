@@ -31,6 +31,7 @@ from ._cache import (
     compilation_cache_info,
     jax_activity,
 )
+from ._checkpoint import save_checkpoint as save_checkpoint  # the warm start's checkpoints
 from ._driver import RenderInterrupted, render
 from ._integrators import AbstractIntegrator
 from ._registry import SAMPLERS

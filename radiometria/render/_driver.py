@@ -59,6 +59,7 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from tqdm import tqdm
 
 from .._checks import check_choice, check_positive_int
+from .._timing import mark
 from .._warmstart import exported_caller, exported_step_caller, uses_lapack
 from ..camera import (
     AbstractCamera,
@@ -617,6 +618,8 @@ def render(
                 film = step(
                     film, kernel, key, spp_arr, jnp.int32(group * plan.passes), pixel, cfg=cfg
                 )
+            if i == steps[0]:
+                mark("first step dispatched")  # `radiometria --timing`
             if serialise or checkpoint is not None or preview is not None:
                 film = jax.block_until_ready(film)
             done = i + 1
@@ -926,7 +929,7 @@ def _exported_step(save, kernel: _Kernel, cfg: _Config, plan: _Plan, film: Film,
         ),
         "native": {"library": native.lib._name, "targets": used} if used else None,
     }
-    step_blob, develop_blob = exported.serialize(), developed.serialize()
+    step_blob, develop_blob = bytes(exported.serialize()), bytes(developed.serialize())
     save(
         step=step_blob,
         develop=develop_blob,
