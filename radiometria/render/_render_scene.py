@@ -162,8 +162,9 @@ class RenderScene(eqx.Module):
         normal = np.cross(e1, e2) / np.where(area > 0, 2.0 * area, 1.0)[:, None]
         p0, e1, e2, normal = (jnp.asarray(x, dtype=dtype) for x in (v0, e1, e2, normal))
         light = AreaLight.from_triangles(
-            p0, e1, e2, normal, area, face_emitter, radiance, emitter_two_sided, dtype=dtype
-        )
+            p0, e1, e2, normal, area, face_emitter, radiance, emitter_two_sided,
+            face_uv=face_uv, dtype=dtype,
+        )  # fmt: skip
         if lights:
             # The bounding sphere of the geometry sets the power of lights at infinity.
             lo, hi = (vertices.min(axis=0), vertices.max(axis=0)) if len(vertices) else (0, 0)

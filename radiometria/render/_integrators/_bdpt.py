@@ -282,7 +282,7 @@ class BDPT(AbstractIntegrator):
             d2 = jnp.maximum(dot(to_prev, to_prev), jnp.finfo(dtype).tiny)
             conv_here = jnp.abs(v.cos_o) / d2
             conv_prev = jnp.where(has_n_prev, jnp.abs(dot(ng_prev, wo)), 1.0) / d2
-            emit = scene.light.emitted(v.face, v.cos_o, valid, wl)
+            emit = scene.light.emitted(v.face, v.cos_o, valid, wl, v.uv)
             emit_pos, emit_dir = scene.light.pdf_le(v.face, v.cos_o)
 
             s, t = coordinate_system(ns)

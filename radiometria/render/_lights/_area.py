@@ -10,10 +10,34 @@ from jaxtyping import Array, Bool, Float, Int
 from ..._math import dot
 from ...montecarlo import sample_cosine_hemisphere, sample_uniform_triangle
 from ...scattering import coordinate_system
-from ...upsampling import RGBIlluminantSpectrum
-from .._spectral import SpectrumTable
-from .._textures import AbstractTexture, ConstantTexture
+from ...upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
+from .._spectral import SpectrumTable, wavelength_grid_nm
+from .._textures import (
+    AbstractTexture,
+    ConstantTexture,
+    TextureSpec,
+    concatenate_textures,
+    texture_parameter,
+)
 from ._base import AbstractLight, EmissionSample, LightSample
+
+
+def _mean_radiance(radiance: AbstractTexture, n_uv: int = 64) -> np.ndarray:
+    """`(e,)` mean emitted radiance of each row over the 1 nm grid (and, for a texture, over
+    an `n_uv` x `n_uv` grid of uv in [0, 1)^2), for selecting lights by power (NumPy, once).
+    Any positive weight where the emission is positive keeps the estimate unbiased."""
+    if isinstance(radiance, ConstantTexture):
+        return np.asarray(radiance.table.values, np.float64).mean(axis=1)
+    rows, wl = radiance.n_rows, wavelength_grid_nm()[::10]
+    g = (np.arange(n_uv) + 0.5) / n_uv
+    uv = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
+    row = np.repeat(np.arange(rows), uv.shape[0])
+    values = radiance(
+        jnp.asarray(row, jnp.int32),
+        jnp.broadcast_to(jnp.asarray(wl, jnp.float32), (row.size, wl.size)),
+        jnp.asarray(np.tile(uv, (rows, 1)), jnp.float32),
+    )
+    return np.asarray(values, np.float64).reshape(rows, -1).mean(axis=1)
 
 
 class AreaLight(AbstractLight):
@@ -37,6 +61,10 @@ class AreaLight(AbstractLight):
         selection probabilities (last = 1).
     - `p0`, `e1`, `e2`, `normal`: `(l, 3)` first corner, edges and unit normal of each
         emissive triangle. [scene units]
+    - `uv0`, `duv1`, `duv2`: `(l, 2)` surface coordinates at the first corner of each
+        emissive triangle and their changes along the two edges, where a texture gives the
+        radiance (`None`: the points' barycentrics are their uv, as Mitsuba's meshes without
+        uv). [1]
     - `phi`: emitted power, $\pi \sum_i A_i \bar L_i$ (twice that for two-sided emitters),
         with $\bar L_i$ the radiance averaged over the 1 nm grid (static, for `LightSet`).
         [W nm^-1]
@@ -61,6 +89,9 @@ class AreaLight(AbstractLight):
     e1: Float[Array, "l 3"]
     e2: Float[Array, "l 3"]
     normal: Float[Array, "l 3"]
+    uv0: Float[Array, "l 2"] | None = None
+    duv1: Float[Array, "l 2"] | None = None
+    duv2: Float[Array, "l 2"] | None = None
     phi: float = eqx.field(static=True, default=0.0)
 
     @classmethod
@@ -75,6 +106,7 @@ class AreaLight(AbstractLight):
         radiance: "SpectrumTable | AbstractTexture",
         emitter_two_sided=None,
         *,
+        face_uv=None,
         dtype=jnp.float32,
     ) -> "AreaLight":
         """Area lights on the triangles of a scene.
@@ -88,6 +120,8 @@ class AreaLight(AbstractLight):
         - `radiance`: emitted radiance, one row per emitter (a `SpectrumTable` or a
             texture). [W m^-2 sr^-1 nm^-1]
         - `emitter_two_sided`: `(e,)` bool (default: front side only).
+        - `face_uv`: `(f, 3, 2)` uv at the corners of each triangle, or `None` (barycentrics
+            serve as uv); used when the radiance is a texture. [1]
         - `dtype`: float dtype of the arrays.
         """
         if isinstance(radiance, SpectrumTable):
@@ -107,7 +141,7 @@ class AreaLight(AbstractLight):
         emissive = np.flatnonzero((face_emitter >= 0) & (area > 0))
         phi = 0.0
         if emissive.size:
-            mean_le = np.asarray(radiance.table.values, np.float64).mean(axis=1)
+            mean_le = _mean_radiance(radiance)
             power = area[emissive] * mean_le[face_emitter[emissive]]
             keep = power > 0
             emissive, power = emissive[keep], power[keep]
@@ -124,6 +158,10 @@ class AreaLight(AbstractLight):
             light_cdf[-1] = 1.0
             pdf_area[emissive] = prob / area[emissive]
         lf = jnp.asarray(light_face, jnp.int32)
+        uv = {}
+        if face_uv is not None and not isinstance(radiance, ConstantTexture):
+            c = jnp.asarray(face_uv, dtype)[lf]
+            uv = {"uv0": c[:, 0], "duv1": c[:, 1] - c[:, 0], "duv2": c[:, 2] - c[:, 0]}
         return cls(
             radiance=radiance,
             two_sided=jnp.asarray(two_sided, bool),
@@ -136,13 +174,25 @@ class AreaLight(AbstractLight):
             e2=e2[lf],
             normal=normal[lf],
             phi=phi,
+            **uv,
         )
 
     @staticmethod
-    def radiance_texture(values: list, dtype=jnp.float32) -> ConstantTexture:
+    def radiance_texture(values: list, dtype=jnp.float32, where: str = "scene") -> AbstractTexture:
         """Emitted radiance of scene values, one row each: RGB triples become
-        `RGBIlluminantSpectrum`s (thesis 2.2.3; white (1, 1, 1) emits D65 with Y = 1)."""
-        return ConstantTexture.from_values(values, RGBIlluminantSpectrum, dtype)
+        `RGBIlluminantSpectrum`s (thesis 2.2.3; white (1, 1, 1) emits D65 with Y = 1).
+        A texture (`TextureSpec`: `bitmap`, `checkerboard`) gives its texels' bounded (albedo)
+        spectra, texels clipped to [0, 1] and no D65, as Mitsuba 3.9's textured `area` emitter
+        evaluates them in its spectral variants (checked against Mitsuba in the tests)."""
+        if not any(isinstance(v, TextureSpec) for v in values):
+            return ConstantTexture.from_values(values, RGBIlluminantSpectrum, dtype)
+        rows = [
+            texture_parameter(v, RGBAlbedoSpectrum, "radiance", where)
+            if isinstance(v, TextureSpec)
+            else ConstantTexture.from_values([v], RGBIlluminantSpectrum, dtype)
+            for v in values
+        ]
+        return concatenate_textures(rows)
 
     def _emitter_two_sided(self, face):
         return self.two_sided[jnp.maximum(self.face_emitter[face], 0)]
@@ -154,11 +204,20 @@ class AreaLight(AbstractLight):
         ok = (cos_light > 0) & (pdf_area > 0)
         return jnp.where(ok, pdf_area * dist * dist / jnp.where(ok, cos_light, 1.0), 0.0)
 
-    def emitted(self, face, cos_o, valid, wavelength_nm):
+    def _uv(self, j, bary, dtype):
+        """uv of sampled points (barycentrics `bary` on light triangle `j`), or `None` for an
+        untextured radiance."""
+        if isinstance(self.radiance, ConstantTexture):
+            return None
+        if self.uv0 is None:
+            return bary[:, 1:3]
+        return self.uv0[j] + bary[:, 1:2] * self.duv1[j] + bary[:, 2:3] * self.duv2[j]
+
+    def emitted(self, face, cos_o, valid, wavelength_nm, uv=None):
         emitter = self.face_emitter[face]
         two_sided = self.two_sided[jnp.maximum(emitter, 0)]
         on = valid & (emitter >= 0) & ((cos_o > 0) | (two_sided & (cos_o != 0)))
-        le = self.radiance(jnp.maximum(emitter, 0), wavelength_nm)
+        le = self.radiance(jnp.maximum(emitter, 0), wavelength_nm, uv)
         return jnp.where(on[:, None], le, 0.0)
 
     def emitted_escaped(self, directions, escaped, wavelength_nm):
@@ -184,7 +243,8 @@ class AreaLight(AbstractLight):
         wi = to_light / jnp.where(dist > 0, dist, 1.0)[:, None]
         cos_light = -jnp.sum(self.normal[j] * wi, axis=-1)
         pdf = self.pdf_li(lf, dist, cos_light)
-        le = self.radiance(jnp.maximum(self.face_emitter[lf], 0), wavelength_nm)
+        uv = self._uv(j, bary, dtype)
+        le = self.radiance(jnp.maximum(self.face_emitter[lf], 0), wavelength_nm, uv)
         return LightSample(wi=wi, dist=dist, radiance=le, pdf=pdf)
 
     def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
@@ -208,7 +268,7 @@ class AreaLight(AbstractLight):
         d = local[:, 0:1] * s + local[:, 1:2] * t + local[:, 2:3] * n
         d = d / jnp.sqrt(dot(d, d))[:, None]
         pdf_dir = local[:, 2] / jnp.pi * jnp.where(two_sided, 0.5, 1.0)
-        le = self.radiance(emitter, wavelength_nm)
+        le = self.radiance(emitter, wavelength_nm, self._uv(j, bary, dtype))
         to_obs = observer - p
         cos_obs = jnp.sum(self.normal[j] * to_obs, axis=-1)
         facing = (cos_obs > 0) | (two_sided & (cos_obs != 0))

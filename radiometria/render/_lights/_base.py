@@ -134,10 +134,12 @@ class AbstractLight(eqx.Module):
         cos_o: Float[Array, " n"],
         valid: Bool[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
+        uv: Float[Array, "n 2"] | None = None,
     ) -> Float[Array, "n k"]:
         """Radiance [W m^-2 sr^-1 nm^-1] leaving the hit on triangle `face` towards the ray's
-        origin, where `cos_o` is the cosine between the normal and that direction and
-        `valid` marks rays that hit something."""
+        origin, where `cos_o` is the cosine between the normal and that direction, `valid`
+        marks rays that hit something and `uv` are the hits' surface coordinates [1] (for a
+        textured radiance; `None`: looked up at (0, 0))."""
 
     @abc.abstractmethod
     def emitted_escaped(

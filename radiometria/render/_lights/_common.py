@@ -93,7 +93,7 @@ class AbstractSurfacelessLight(AbstractLight):
     def pdf_li(self, face, dist, cos_light):
         return jnp.zeros(face.shape, dist.dtype)
 
-    def emitted(self, face, cos_o, valid, wavelength_nm):
+    def emitted(self, face, cos_o, valid, wavelength_nm, uv=None):
         return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
 
 

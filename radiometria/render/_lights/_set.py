@@ -152,10 +152,10 @@ class LightSet(AbstractLight):
         i = self.area_index
         return self.prob[i] * self.lights[i].pdf_li(face, dist, cos_light)
 
-    def emitted(self, face, cos_o, valid, wavelength_nm):
+    def emitted(self, face, cos_o, valid, wavelength_nm, uv=None):
         if self.area_index < 0:
             return jnp.zeros(wavelength_nm.shape, cos_o.dtype)
-        return self.lights[self.area_index].emitted(face, cos_o, valid, wavelength_nm)
+        return self.lights[self.area_index].emitted(face, cos_o, valid, wavelength_nm, uv)
 
     def emitted_escaped(self, directions, escaped, wavelength_nm):
         if self.infinite_index < 0:

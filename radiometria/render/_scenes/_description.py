@@ -24,6 +24,7 @@ import numpy as np
 from ...camera import look_at as camera_look_at
 from .._geometry._mesh import TriangleMesh, _areas, validate_triangles
 from .._spectral import SpectralValue
+from .._textures import TextureSpec
 
 __all__ = [
     "check_spectral_values",
@@ -125,7 +126,8 @@ class AreaEmitter:
     **Fields:**
 
     - `radiance`: emitted radiance, a spectral value of the module docstring (an RGB triple
-        is an illuminant spectrum). [W m^-2 sr^-1 nm^-1, or the file's relative unit]
+        is an illuminant spectrum) or a `TextureSpec` (looked up at the emitting point's
+        uv). [W m^-2 sr^-1 nm^-1, or the file's relative unit]
     - `triangles`: `(k,)` int32 indices into `SceneDescription.faces`.
     - `areas`: `(k,)` areas of those triangles. [scene length unit^2]
     - `total_area`: their sum. [scene length unit^2]
@@ -136,7 +138,7 @@ class AreaEmitter:
         Ch. 8 (emitters; area lights are sampled uniformly by area, `Pharr2023` §12.2).
     """
 
-    radiance: SpectralValue
+    radiance: "SpectralValue | TextureSpec"
     triangles: np.ndarray
     areas: np.ndarray
     total_area: float
