@@ -128,16 +128,18 @@ def get_lut(space="sRGB") -> RGBToSpectrumLUT:
     reproduces such a colour. At the table's nodes `fit_lut` stored the least-squares best
     fit of eq. 2.27 (`RESULTS.out_of_reach`): a sigmoid spectrum, so in [0, 1], whose colour
     is the nearest reachable one in CIELAB (checked: within 0.01 $\Delta E^*_{ab}$ of the
-    nearest optimal colour on the 1 nm grid). Between nodes the lookup interpolates the
-    coefficients as everywhere else: the spectrum is still in [0, 1] and its colour is one a
-    reflectance has, but not the nearest (measured: up to 4.3 $\Delta E^*_{ab}$ farther). The
-    lookup neither fails nor clips for these colours: `rgb` in [0, 1] is all it checks.
+    nearest optimal colour on the 1 nm grid). Between nodes the wide-gamut lookups are refined
+    by the same fit (below), which pulls the colour towards the nearest reachable one as well;
+    the spectrum is in [0, 1] and its colour is one a reflectance has. The lookup neither fails
+    nor clips for these colours: `rgb` in [0, 1] is all it checks.
 
-    **Accuracy.** sRGB meets max CIEDE2000 <= 1 and mean <= 0.03 over its whole cube. The
-    wide-gamut tables do not, even over the colours a reflectance has: the table cells next
-    to the solid's boundary mix exact nodes with best-fit nodes, and trilinear interpolation
-    between them misses by up to a few CIEDE2000 units (the numbers are in `_data.py` and each
-    file's `metadata`).
+    **Accuracy.** Every packaged table meets max CIEDE2000 <= 1 and mean <= 0.03 over the
+    colours of its cube that a reflectance has (sRGB over its whole cube). sRGB gets there by
+    pbrt's trilinear lookup. The wide-gamut tables' cells next to the object-colour solid's
+    boundary mix exact nodes with best-fit nodes, and interpolation alone misses there by up to
+    8 CIEDE2000 units, so their lookups finish with 32 Levenberg-Marquardt iterations of eq.
+    2.27 (`RGBToSpectrumLUT.refine_steps`; measured max 0.02-0.06, mean < 1e-4; `_lut.py`).
+    `lut.with_refinement(0)` gives pbrt's plain lookup.
 
     **Arguments:**
 

@@ -33,7 +33,8 @@ from jaxtyping import Array, Float
 
 from .._checks import check_positive_int
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
-from ._fit import (
+from ._forward import forward_model
+from ._lm import (
     DEFAULT_TOLERANCE,
     LMState,
     ModelArrays,
@@ -44,8 +45,7 @@ from ._fit import (
     residual_and_jacobian,
     target_Lab,
 )
-from ._forward import forward_model
-from ._lut import RGBToSpectrumLUT, brightness_scale
+from ._lut import REFINE_STEPS, RGBToSpectrumLUT, brightness_scale
 
 WHITE_C2 = 2048.0  # c2 of the white node (module docstring)
 
@@ -562,7 +562,11 @@ def fit_lut(
     ok = (resid_t <= tolerance) | exact_t
     code = np.where(ok, 0, np.where(stat_t, 2, 1))
     result = _results_array(code)
-    lut = RGBToSpectrumLUT(jnp.asarray(scale_np, dtype), jnp.asarray(table), model.colourspace)
+    # Entries no reflectance reaches: this table's lookups are refined by the fit (`_lut.py`).
+    refine = REFINE_STEPS if bool(np.any(code == 2)) else 0
+    lut = RGBToSpectrumLUT(
+        jnp.asarray(scale_np, dtype), jnp.asarray(table), model.colourspace, refine
+    )
     settings = {
         **model.description(),
         "resolution": res,

@@ -54,7 +54,7 @@ from .._io import atomic_write
 from ..colorimetry import RGB_COLOURSPACES
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._forward import forward_model
-from ._lut import RGBToSpectrumLUT
+from ._lut import REFINE_STEPS, RGBToSpectrumLUT
 
 FORMAT_NAME = "radiometria-rgb2spec"
 FORMAT_VERSION = 1
@@ -389,7 +389,10 @@ def _load_npz(path: Path):
                     f"checksum mismatch: stored sha256 {expected[:16]}..., data {actual[:16]}...",
                 )
         colourspace = meta.get("colourspace", colourspace)
-    lut = RGBToSpectrumLUT(scale, coeffs, colourspace)
+    # A fit that met colours no reflectance has: its lookups are refined (`_lut.py`).
+    summary = meta.get("fit_summary")
+    unreachable = isinstance(summary, dict) and summary.get("out_of_reach", 0) > 0
+    lut = RGBToSpectrumLUT(scale, coeffs, colourspace, REFINE_STEPS if unreachable else 0)
     return lut, {"format": "npz", "colourspace": colourspace, "metadata": meta}
 
 

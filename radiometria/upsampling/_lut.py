@@ -13,6 +13,21 @@ largest component `l` (ties broken as pbrt), `z = rgb[l]`, `x, y` the next two c
 divided by `z` on the `(res - 1)` grid, the brightness interval found by search in `scale`, and
 trilinear interpolation of the coefficients.
 
+**Refined lookups (wide-gamut tables).** A table whose fit found colours that no reflectance
+has (`fit_lut`'s `out_of_reach` entries: the bright, saturated corners of Display P3, Rec.2020
+and ACEScg) has cells that mix exact nodes with best-fit nodes of unreachable colours, and
+trilinear interpolation in those cells misses colours a reflectance does have by up to 8
+CIEDE2000 units. Such a table (`refine_steps > 0`, set by `load_lut` and `fit_lut` from the
+fit's record) finishes every lookup with the fit itself: `refine_steps` Levenberg-Marquardt
+iterations of eq. 2.27 (`_lm.py`) from the interpolated coefficients and, side by side, from
+(0, 0, 0), keeping the better. Measured on 21 000-24 000 random colours a reflectance has per
+space: 32 iterations give max CIEDE2000 0.02-0.06, mean < 1e-4 (the interpolation alone:
+max 3.2-7.8, mean 0.04-0.08; the interpolated start alone stalls in a poor basin for a few
+colours, the start at 0 for others). Derivatives of refined coefficients come from the implicit
+function theorem at the solution ($dc = J^{+}\, d\,\mathrm{Lab}_t$, exact where the colour is
+reproduced), not from unrolling the iterations. The sRGB table has no such cells and is looked
+up exactly as pbrt does.
+
 The table is built by `fit_lut` (`_fit_lut.py`), which also sets its explicit entries (black
 row, grey column, white), and read and written by `load_lut` / `save_lut` (`_io.py`).
 """
@@ -24,7 +39,18 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
-from ._sigmoid_polynomial import common_float_dtype, grey_coefficients
+from ._forward import forward_model
+from ._lm import ModelArrays, _lm_direction, lm_init, lm_iterate, target_Lab
+from ._sigmoid_polynomial import (
+    common_float_dtype,
+    grey_coefficients,
+    nm_to_normalised_coefficients,
+    normalised_to_nm_coefficients,
+)
+
+# Levenberg-Marquardt iterations of each of a refined lookup's two starts (module docstring):
+# 16 left max CIEDE2000 0.36-0.47 on Rec.2020 and ACEScg, 32 gives 0.02-0.06.
+REFINE_STEPS = 32
 
 
 def brightness_scale(resolution: int, dtype=np.float64) -> np.ndarray:
@@ -51,6 +77,9 @@ class RGBToSpectrumLUT(eqx.Module):
     - `scale` (res,): brightness nodes, increasing from 0 to 1. [-]
     - `coeffs` (3, res, res, res, 3): nm coefficients in pbrt's layout (module docstring).
         [nm^-2, nm^-1, -]
+    - `refine_steps`: Levenberg-Marquardt iterations that finish each lookup (static; 0 =
+        pbrt's plain trilinear lookup). `load_lut` and `fit_lut` set `REFINE_STEPS` for tables
+        whose fit found colours no reflectance has (module docstring, "Refined lookups").
 
     `lut.coefficients(rgb)` maps linear RGB (..., 3) in [0, 1] to nm coefficients (..., 3).
 
@@ -65,8 +94,15 @@ class RGBToSpectrumLUT(eqx.Module):
     colourspace: str = eqx.field(static=True)
     scale: Float[Array, " res"]
     coeffs: Float[Array, "3 res res res 3"]
+    refine_steps: int = eqx.field(static=True)
 
-    def __init__(self, scale: ArrayLike, coeffs: ArrayLike, colourspace: str = "sRGB"):
+    def __init__(
+        self,
+        scale: ArrayLike,
+        coeffs: ArrayLike,
+        colourspace: str = "sRGB",
+        refine_steps: int = 0,
+    ):
         scale = as_float_array(scale, "scale")
         coeffs = as_float_array(coeffs, "coeffs")
         if scale.ndim != 1 or scale.shape[0] < 2:
@@ -77,13 +113,26 @@ class RGBToSpectrumLUT(eqx.Module):
                 f"`coeffs` must have shape (3, res, res, res, 3) = {(3, res, res, res, 3)} for "
                 f"res = {res}, got {coeffs.shape}."
             )
+        if (
+            isinstance(refine_steps, bool)
+            or not isinstance(refine_steps, int | np.integer)
+            or refine_steps < 0
+        ):
+            raise ValueError(f"`refine_steps` must be an int >= 0, got {refine_steps!r}.")
         self.resolution = int(res)
+        self.refine_steps = int(refine_steps)
         self.colourspace = str(colourspace)
         self.scale = scale
         self.coeffs = coeffs
 
+    def with_refinement(self, refine_steps: int) -> "RGBToSpectrumLUT":
+        """The same table with `refine_steps` refinement iterations per lookup (0: pbrt's plain
+        lookup)."""
+        return RGBToSpectrumLUT(self.scale, self.coeffs, self.colourspace, refine_steps)
+
     def coefficients(self, rgb: Float[ArrayLike, "*batch 3"]) -> Float[Array, "*batch 3"]:
-        r"""nm coefficients for linear RGB in [0, 1] (pbrt's lookup, module docstring).
+        r"""nm coefficients for linear RGB in [0, 1] (pbrt's lookup, module docstring; refined
+        by the fit of eq. 2.27 where `refine_steps > 0`).
 
         Differentiable in `rgb` (piecewise linear, finite gradients also at black and on the
         grey axis) and in the table. Components outside [0, 1] or non-finite raise
@@ -175,9 +224,36 @@ def lookup(lut: RGBToSpectrumLUT, rgb: Array) -> Array:
         lerp(dy, lerp(dx, co(0, 0, 0), co(1, 0, 0)), lerp(dx, co(0, 1, 0), co(1, 1, 0))),
         lerp(dy, lerp(dx, co(0, 0, 1), co(1, 0, 1)), lerp(dx, co(0, 1, 1), co(1, 1, 1))),
     )
+    if lut.refine_steps > 0:
+        c = _refine(lut, flat, c)
     grey = (flat[:, 0] == flat[:, 1]) & (flat[:, 1] == flat[:, 2])
     # Closed form for greys, with safe arguments so gradients stay finite at black and white.
     v = jnp.where(grey, flat[:, 0], 0.5)
     c_grey = grey_coefficients(v)
     c = jnp.where(grey[:, None], c_grey, c)
     return c.reshape(batch + (3,))
+
+
+def _refine(lut: RGBToSpectrumLUT, rgb: Array, c_nm: Array) -> Array:
+    """Finish a lookup with the fit of eq. 2.27 (module docstring, "Refined lookups").
+
+    Two Levenberg-Marquardt runs of `lut.refine_steps` iterations, from the interpolated
+    coefficients and from (0, 0, 0); the one with the lower residual wins. The iterations are
+    detached; the derivative in `rgb` is the implicit function theorem's, $J^{+}$ times the
+    derivative of the target's CIELAB, carried by a step that is zero in value.
+    """
+    dtype = rgb.dtype
+    m = ModelArrays.build(forward_model(lut.colourspace), dtype)
+    lab_t = target_Lab(rgb, m)
+    sg = jax.lax.stop_gradient
+    start = sg(nm_to_normalised_coefficients(c_nm))
+    start = jnp.where(jnp.isfinite(start), start, 0.0)
+    n = lut.refine_steps + 1  # the first iteration evaluates the start point
+    a = lm_iterate(lm_init(start), sg(lab_t), m, n)
+    b = lm_iterate(lm_init(jnp.zeros_like(start)), sg(lab_t), m, n)
+    first = (a.cost <= b.cost) | ~jnp.isfinite(b.cost)
+    c = jnp.where(first[:, None], a.c, b.c)
+    J = jnp.where(first[:, None, None], a.J, b.J)
+    # dc = J^+ d Lab_t: the least-squares step for the residual change -(Lab_t - sg(Lab_t)).
+    step = _lm_direction(J, sg(lab_t) - lab_t, jnp.zeros(c.shape[:1], dtype))
+    return normalised_to_nm_coefficients(c + step).astype(dtype)

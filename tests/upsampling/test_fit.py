@@ -8,7 +8,7 @@ import pytest
 
 import radiometria.colorimetry as cm
 import radiometria.upsampling as up
-from radiometria.upsampling._fit import (
+from radiometria.upsampling._lm import (
     ModelArrays,
     _lm_direction,
     residual,
