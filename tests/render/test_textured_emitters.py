@@ -81,7 +81,8 @@ def test_textured_radiance_matches_mitsuba_emitter_eval():
 
 @pytest.mark.parametrize(
     "integrator",
-    ["path", "ptracer", pytest.param("volpath", marks=pytest.mark.slow),
+    ["path", pytest.param("ptracer", marks=pytest.mark.slow),
+     pytest.param("volpath", marks=pytest.mark.slow),
      pytest.param("bdpt", marks=pytest.mark.slow)],
 )  # fmt: skip
 def test_constant_texture_equals_constant_radiance(tmp_path, integrator):

@@ -98,11 +98,17 @@ def test_principled_sample_weights_match_f_and_pdf():
     bxdf = sc.PrincipledBxDF(COLOR, luminance=Y, **CASES["everything"])
     wo = jnp.broadcast_to(_dir(0.9), (3000, 3))
     u = jax.random.uniform(jax.random.key(3), (3000, 3))
-    s = bxdf.sample_f(wo, u[:, 0], u[:, 1:])
+    s, f, pdf = jax.jit(
+        lambda wo, u: (
+            s := bxdf.sample_f(wo, u[:, 0], u[:, 1:]),
+            bxdf.f(wo, s.wi),
+            bxdf.pdf(wo, s.wi),
+        )
+    )(wo, u)
     ok = np.asarray(s.pdf > 0)
     assert ok.mean() > 0.8
-    np.testing.assert_allclose(np.asarray(s.f)[ok], np.asarray(bxdf.f(wo, s.wi))[ok], rtol=1e-9)
-    np.testing.assert_allclose(np.asarray(s.pdf)[ok], np.asarray(bxdf.pdf(wo, s.wi))[ok], rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(s.f)[ok], np.asarray(f)[ok], rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(s.pdf)[ok], np.asarray(pdf)[ok], rtol=1e-9)
     # Every lobe is drawn: reflection, transmission.
     assert 0.05 < float(jnp.mean(s.is_transmission)) < 0.6
 
@@ -113,11 +119,11 @@ def test_principled_reflection_is_reciprocal():
     wo, wi = np.random.default_rng(5).normal(size=(2, 400, 3))
     wo[:, 2], wi[:, 2] = np.abs(wo[:, 2]), np.abs(wi[:, 2])
     wo, wi = (w / np.linalg.norm(w, axis=1, keepdims=True) for w in (wo, wi))
-    f = np.asarray(bxdf.f(np.concatenate([wo, wi]), np.concatenate([wi, wo])))
+    f = np.asarray(jax.jit(lambda a, b: bxdf.f(a, b))(np.r_[wo, wi], np.r_[wi, wo]))
     np.testing.assert_allclose(f[:400], f[400:], rtol=1e-10, atol=1e-14)
 
 
-@pytest.mark.parametrize("theta", [0.0, 0.8, 1.3])
+@pytest.mark.parametrize("theta", [0.0, 1.3])
 def test_principled_diffuse_albedo_closed_form(theta):
     """At roughness 0 and eta = 1 (no specular reflection) only Burley's diffuse lobe is left:
     f = (C/pi)(1 - w_o/2)(1 - w_i/2) with w = (1 - cos)^5, whose albedo is
@@ -182,8 +188,11 @@ def test_principled_thin_matches_mitsuba(case):
     assert np.count_nonzero(ev[:, 0]) > 60
 
 
-@pytest.mark.parametrize(("case", "sign"), [("everything", 1.0), ("everything", -1.0),
-                                            ("glass", 1.0)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("case", "sign"),
+    [("everything", 1.0), ("everything", -1.0),
+     pytest.param("glass", 1.0, marks=pytest.mark.slow)],
+)  # fmt: skip
 def test_principled_thin_sampling_chi2(case, sign):
     bxdf = sc.PrincipledThinBxDF(COLOR, luminance=Y, **THIN_CASES[case])
     res = _defective_chi2(bxdf, sign * _dir(0.7), key=jax.random.key(13), n_samples=20_000)
@@ -194,9 +203,10 @@ def test_principled_thin_diffuse_transmission_closed_form():
     """diff_trans = 2 (Mitsuba's top of the range) and no specular lobes: a Lambertian
     transmitter, every sample's weight is the base colour and goes to the other side."""
     bxdf = sc.PrincipledThinBxDF(COLOR, 0.5, diff_trans=2.0)
+    sample = jax.jit(lambda wo, u: bxdf.sample_f(wo, u[:, 0], u[:, 1:]))
+    u = jax.random.uniform(jax.random.key(2), (500, 3))
     for w in (_dir(0.3), -_dir(1.1)):
-        u = jax.random.uniform(jax.random.key(2), (500, 3))
-        s = bxdf.sample_f(jnp.broadcast_to(w, (500, 3)), u[:, 0], u[:, 1:])
+        s = sample(jnp.broadcast_to(w, (500, 3)), u)
         assert bool(jnp.all(s.is_transmission))
         np.testing.assert_allclose(s.weight(), np.broadcast_to(COLOR, (500, 3)), rtol=1e-10)
 
@@ -211,5 +221,5 @@ def test_principled_thin_energy_bound_and_reciprocity():
     wo, wi = np.random.default_rng(8).normal(size=(2, 300, 3))
     wo[:, 2], wi[:, 2] = np.abs(wo[:, 2]), np.abs(wi[:, 2])
     wo, wi = (w / np.linalg.norm(w, axis=1, keepdims=True) for w in (wo, wi))
-    f = np.asarray(bxdf.f(np.concatenate([wo, wi]), np.concatenate([wi, wo])))
+    f = np.asarray(jax.jit(lambda a, b: bxdf.f(a, b))(np.r_[wo, wi], np.r_[wi, wo]))
     np.testing.assert_allclose(f[:300], f[300:], rtol=1e-10, atol=1e-14)
