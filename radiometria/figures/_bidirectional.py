@@ -74,15 +74,16 @@ def bidirectional_data(
     rendered by `path`, `ptracer`, `bdpt` and `pssmlt` at about equal time.
 
     `size` (16 px in smoke mode, else 32), `max_depth` `DEPTH`, box filter. The reference is
-    `path` at `ref_spp` (256 or 1024 spp, seed 1000). `bdpt` renders `bdpt_spp` (8 or 32)
+    `path` at `ref_spp` (512 or 4096 spp, seed 1000). `bdpt` renders `bdpt_spp` (8 or 32)
     samples per pixel; each other integrator's sample count (mutations per pixel for
-    `pssmlt`) is set from a timed 4-spp render after its compiling warm-up, so that its time
-    matches bdpt's, then it is rendered and timed again. Returns `size`, `reference`, and for
+    `pssmlt`) is set from timed 16- and 64-spp renders after its compiling warm-up (time =
+    fixed + per-spp cost), so that its time matches bdpt's, then it is rendered and timed
+    again. Returns `size`, `reference`, and for
     each integrator name `images[name]` (linear sRGB), `spp[name]`, `seconds[name]` [s] and
     `rel_mse[name]` against the reference.
     """
     size = size if size is not None else (16 if smoke else 32)
-    ref_spp = ref_spp if ref_spp is not None else (256 if smoke else 1024)
+    ref_spp = ref_spp if ref_spp is not None else (512 if smoke else 4096)
     bdpt_spp = bdpt_spp if bdpt_spp is not None else (8 if smoke else 32)
     with tempfile.TemporaryDirectory() as tmp:
         description = load_scene(glass_panel_scene(tmp))
@@ -93,7 +94,7 @@ def bidirectional_data(
         "path": PathTracer(max_depth=DEPTH),
         "ptracer": PTracer(max_depth=DEPTH),
         "bdpt": BDPT(max_depth=DEPTH),
-        "pssmlt": PSSMLT(max_depth=DEPTH, chains=4 * size, bootstrap_samples=16 * size * size),
+        "pssmlt": PSSMLT(max_depth=DEPTH, chains=4 * size, bootstrap_samples=2 * size * size),
     }
 
     def run(name, spp, seed):
@@ -102,17 +103,23 @@ def bidirectional_data(
             sampler=OwenSobol(), batch=size * size * quantum, progress=False,
         )  # fmt: skip
 
-    # bdpt first: its time at bdpt_spp is the budget; each other integrator's sample count
-    # comes from its own timed 4-spp render. Compiled programs are dropped after each
-    # integrator (memory: `radiometria demo` renders every figure in one process).
+    # bdpt first: its time at bdpt_spp is the budget. Each integrator's time is fitted as
+    # fixed + per_spp x spp from timed renders at 16 and 64 spp after its compiling warm-up
+    # (pssmlt's bootstrap is a fixed cost), and its sample count set to fit the budget.
+    # Compiled programs are dropped after each integrator (memory: `radiometria demo` renders
+    # every figure in one process).
     images, spp, seconds = {}, {}, {}
     budget = reference = None
+    lo, hi = 4 * quantum, 16 * quantum  # long enough to time on a busy CPU
     for i, name in enumerate(["bdpt", "path", "ptracer", "pssmlt"]):
         run(name, quantum, 7)  # compiles
-        per_spp = _timed(lambda n=name: run(n, quantum, 8))[1] / quantum
+        t1 = _timed(lambda n=name: run(n, lo, 8))[1]
+        t2 = _timed(lambda n=name: run(n, hi, 9))[1]
+        per_spp = max((t2 - t1) / (hi - lo), 0.1 * t2 / hi)
+        fixed = max(t1 - lo * per_spp, 0.0)
         if budget is None:
-            budget = per_spp * bdpt_spp
-        n = bdpt_spp if name == "bdpt" else budget / per_spp
+            budget = fixed + per_spp * bdpt_spp
+        n = bdpt_spp if name == "bdpt" else (budget - fixed) / per_spp
         spp[name] = max(quantum, quantum * round(n / quantum))
         images[name], seconds[name] = _timed(lambda n=name, i=i: run(n, spp[n], 100 + i))
         if name == "path":
