@@ -95,10 +95,11 @@ def _ours(scene_name, size, integrator, rfilter=None):
 
     def run(spp, seed):
         # One step holding exactly the render's paths: bdpt traces every slot of a step (no
-        # compaction of inactive padding slots), so a default (larger) batch would time padding.
+        # compaction of inactive padding slots), so a default (larger) batch would time padding;
+        # at most 2^18 paths per step (a 4096-spp reference would not fit in memory at once).
         img = render(
             scene, camera=camera, rfilter=rfilter, spp=spp, seed=seed,
-            integrator=integrator, progress=False, batch=size * size * spp,
+            integrator=integrator, progress=False, batch=min(size * size * spp, 2**18),
         )  # fmt: skip
         return np.asarray(img, np.float64)
 
