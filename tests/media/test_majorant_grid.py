@@ -153,7 +153,7 @@ def test_a_constant_grid_is_the_homogeneous_medium():
     cells; free flights have the homogeneous medium's mean weights."""
     grid = np.full(SHAPE, 1.7)
     s = np.array([0.4, 0.9])
-    o, w, t_max, oo, ww, tt = _rays(2000)
+    o, w, t_max, oo, ww, tt = _rays(250)
     n = oo.shape[0]
     lam = jnp.tile(jnp.asarray([500.0, 600.0]), (n, 1))
     u = jax.random.uniform(jax.random.key(2), (n, 2), jnp.float64)
