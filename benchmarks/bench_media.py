@@ -16,6 +16,7 @@ when libLLVM is found, `llvm_ad_spectral`. The helpers (timing, interpolation, r
 lookup) are `bench_render.py`'s.
 
     .venv/bin/python benchmarks/bench_media.py [--size 64] [--ref-spp 1024] [--quick]
+        [--scenes homogeneous heterogeneous] [--no-llvm]
 """
 
 import argparse
