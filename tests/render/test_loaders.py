@@ -10,6 +10,7 @@ import pytest
 import radiometria.render as rr
 from radiometria.radiometry import BlackbodySpectrum
 from radiometria.render import LinearRGB, SceneError, load_mesh, load_mitsuba_xml, load_scene
+from radiometria.render._scenes._json import load_json
 
 SCENE = """\
 <scene version="3.0.0">
@@ -270,6 +271,25 @@ def test_bad_json_reflectance_names_the_field(tmp_path):
     path = tmp_path / "box.json"
     path.write_text(json.dumps(data))
     with pytest.raises(SceneError, match=rf"box\.json: field 'materials\.{name}\.{key}'"):
+        load_scene(path)
+
+
+def test_json_two_sided_material(tmp_path):
+    """`"two_sided": true` makes a material two-sided (and is not read as a spectrum); a
+    non-boolean value is refused by field."""
+    data = json.loads((Path(rr.__file__).parent / "data" / "cornell_box.json").read_text())
+    name = next(iter(data["materials"]))
+    data["materials"][name]["two_sided"] = True
+    path = tmp_path / "box.json"
+    path.write_text(json.dumps(data))
+    desc = load_json(path.read_text(), str(path))
+    assert [m.two_sided for m in desc.materials if m.name == name] == [True]
+    assert all(m.two_sided is False for m in desc.materials if m.name != name)
+    assert "two_sided" not in next(m for m in desc.materials if m.name == name).params
+    assert load_scene(path).n_triangles > 0
+    data["materials"][name]["two_sided"] = "yes"
+    path.write_text(json.dumps(data))
+    with pytest.raises(SceneError, match=rf"materials\.{name}\.two_sided'.*true or false"):
         load_scene(path)
 
 

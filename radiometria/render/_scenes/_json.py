@@ -234,11 +234,15 @@ def load_json(text: str, file: str, *, measured_fixups: bool = False) -> SceneDe
             )
             params = {}
             for key, val in m.items():
-                if key == "type":
+                if key in ("type", "two_sided"):
                     continue
                 pname = key.removesuffix("_linear_srgb").removesuffix("_spectrum")
                 params[pname] = _json_spectrum(val, spectra, grid)
-            two = bool(m["two_sided"].value) if m.has("two_sided") else False
+            two = False
+            if m.has("two_sided"):
+                two = m["two_sided"].value
+                if not isinstance(two, bool):
+                    raise m["two_sided"].err(f"must be true or false, got {two!r}")
             index[name] = len(materials)
             materials.append(Material(kind, params, two_sided=two, name=name))
 
