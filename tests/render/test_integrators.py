@@ -64,7 +64,11 @@ def _irradiance_below_rectangle_centre(a, b, h, le):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("integrator", [Direct(), Path(max_depth=2)], ids=["direct", "path"])
+@pytest.mark.parametrize(
+    "integrator",
+    [Direct(), Direct(emitter_samples=2, bsdf_samples=3), Path(max_depth=2)],
+    ids=["direct", "direct 2+3", "path"],
+)
 def test_direct_irradiance_under_rectangle_light(integrator):
     """Diffuse floor under a one-sided rectangular light: L = albedo / pi * E (closed form)."""
     a, b, h, le, albedo = 1.0, 0.6, 0.8, 3.0, 0.6

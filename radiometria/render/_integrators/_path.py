@@ -368,44 +368,65 @@ def _segment(
     )
 
 
+class ShadingFrame(eqx.Module):
+    """The local frame at a batch of hits: the material, the shading normal `n` and tangents
+    `s`, `t` (rows `(n, 3)`), whether the side hit scatters, and the local dp/du, dp/dv and
+    geometric normal for normal and bump maps (`None` when no material needs them)."""
+
+    material: Array
+    s: Array
+    t: Array
+    n: Array
+    scatters: Array  # bool (n,)
+    geometry: HitGeometry | None
+
+    def to_local(self, w):
+        return jnp.stack([dot(w, self.s), dot(w, self.t), dot(w, self.n)], axis=-1)
+
+    def to_world(self, w):
+        return w[:, 0:1] * self.s + w[:, 1:2] * self.t + w[:, 2:3] * self.n
+
+
+def shading_frame(scene: RenderScene, v: _Vertex) -> ShadingFrame:
+    """The shading frame at the hits `v`, as Mitsuba builds it.
+
+    The shading normal (interpolated vertex normals, else the face normal) is flipped towards
+    the arriving ray for two-sided reflectors. A ray arriving at the back of a one-sided
+    reflector ends there (Mitsuba's one-sided BSDFs: `scatters` is False); dielectrics keep the
+    normal, and wo below it means the ray is inside. Which side was hit, and where rays leave
+    from, follow the geometric normal (no light leaks through a surface; Mitsuba and pbrt
+    alike). With normal or bump maps the tangent `s` follows dp/du (Mitsuba's frame).
+    """
+    material = scene.face_material[v.face]
+    two_sided = scene.materials.two_sided[material]
+    transmissive = scene.materials.transmissive[material]
+    front = v.cos_o > 0
+    flip = (two_sided & ~front & ~transmissive)[:, None]
+    n = jnp.where(flip, -v.ns, v.ns)
+    scatters = front | two_sided | transmissive
+    if not scene.materials.needs_geometry:
+        s, t = coordinate_system(n)
+        return ShadingFrame(material, s, t, n, scatters, None)
+    dpdu, dpdv = surface_tangents(scene, v.face, v.n)
+    s = dpdu - n * dot(n, dpdu)[:, None]
+    s_len = jnp.sqrt(dot(s, s))[:, None]
+    s = jnp.where(s_len > 1e-12, s / jnp.where(s_len > 1e-12, s_len, 1.0), coordinate_system(n)[0])
+    t = jnp.cross(n, s)
+    local = ShadingFrame(material, s, t, n, scatters, None).to_local
+    ng = jnp.where(flip, -v.n, v.n)
+    geometry = HitGeometry(local(dpdu), local(dpdv), local(ng))
+    return ShadingFrame(material, s, t, n, scatters, geometry)
+
+
 def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u_b, roulette):
     """At the hit `v`: next-event estimation, BSDF sampling of the next segment, roulette."""
     beta, radiance = state.beta, state.radiance
     wo = -state.d
-    material = scene.face_material[v.face]
-    two_sided = scene.materials.two_sided[material]
-    transmissive = scene.materials.transmissive[material]
-    # Shading frame: the shading normal (interpolated vertex normals, else the face normal),
-    # flipped towards wo for two-sided reflectors. A ray arriving at the back of a one-sided
-    # reflector ends there (Mitsuba's one-sided BSDFs); dielectrics keep the normal, and wo
-    # below it means the ray is inside. Which side was hit, and where rays leave from, follow
-    # the geometric normal (no light leaks through a surface; Mitsuba and pbrt alike).
-    front = v.cos_o > 0
-    flip = (two_sided & ~front & ~transmissive)[:, None]
-    n = jnp.where(flip, -v.ns, v.ns)
-    alive = state.alive & (front | two_sided | transmissive)
-    geometry = None
-    if scene.materials.needs_geometry:  # normal or bump maps: Mitsuba's frame from dp/du
-        dpdu, dpdv = surface_tangents(scene, v.face, v.n)
-        s = dpdu - n * dot(n, dpdu)[:, None]
-        s_len = jnp.sqrt(dot(s, s))[:, None]
-        s = jnp.where(s_len > 1e-12, s / jnp.where(s_len > 1e-12, s_len, 1.0),
-                      coordinate_system(n)[0])  # fmt: skip
-        t = jnp.cross(n, s)
-    else:
-        s, t = coordinate_system(n)
-
-    def to_local(w):
-        return jnp.stack([dot(w, s), dot(w, t), dot(w, n)], axis=-1)
-
-    def to_world(w):
-        return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
-
+    frame = shading_frame(scene, v)
+    alive = state.alive & frame.scatters
+    to_local, to_world = frame.to_local, frame.to_world
     wo_l = to_local(wo)
-    if geometry is None and scene.materials.needs_geometry:
-        ng = jnp.where(flip, -v.n, v.n)
-        geometry = HitGeometry(to_local(dpdu), to_local(dpdv), to_local(ng))
-    bsdf = scene.materials.bxdf(material, wavelength_nm, v.uv, geometry)
+    bsdf = scene.materials.bxdf(frame.material, wavelength_nm, v.uv, frame.geometry)
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
 
     # Next-event estimation: a point on a light (e.g. an emissive triangle chosen by power x
