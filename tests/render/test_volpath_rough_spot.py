@@ -17,8 +17,8 @@ while the binned one passes it (100 %).
 
 Found with this scene: our `roughdielectric` used the height-correlated Smith
 masking-shadowing where Mitsuba 3 uses the separable $G_1G_1$; with no medium at all the image
-was 10 % brighter than Mitsuba's (+3.5 pooled standard errors), with the medium 14 %. With
-`masking="separable"` in the plugin the no-medium means agree (-0.4 se) and this test passes.
+was 10 % brighter than Mitsuba's (+3.5 pooled standard errors), with the medium 14 %. The
+`roughdielectric` and `roughconductor` plugins now use `masking="separable"` as Mitsuba does.
 """
 
 import numpy as np
@@ -89,11 +89,6 @@ def _judge(path, mean, var):
     return result, mean_ok, img
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="roughdielectric uses height-correlated masking, Mitsuba 3 the separable one "
-    "(module docstring): 10-14 % brighter; not media code (the material plugin's)",
-)
 def test_medium_behind_a_rough_dielectric_lit_by_a_spot_passes_against_mitsuba(rough_spot):
     scene, mean, var = rough_spot
     result, mean_ok, img = _judge(scene(0.7), mean, var)

@@ -43,7 +43,9 @@ class RoughConductor(AbstractMaterial):
     `GGXRoughConductor`, the same plugin with the Trowbridge-Reitz (GGX) distribution (a
     separate kind, so that scenes may mix the two). An unknown `distribution` is an error.
     `sample_visible` is read and visible normals are always sampled (the estimate's
-    expectation is the same; only the noise differs).
+    expectation is the same; only the noise differs). Shadowing-masking is Smith's separable
+    G1(wo) G1(wi), as in Mitsuba 3 (pbrt-v4's height-correlated form is the
+    BxDF's default, `masking="height_correlated"`).
 
     **Fields:**
 
@@ -93,7 +95,9 @@ class RoughConductor(AbstractMaterial):
             jnp.maximum(a(row, wavelength_nm, uv)[..., 0], 1e-4)
             for a in (self.alpha_u, self.alpha_v)
         )
-        bxdf = RoughConductorBxDF(alpha_u, eta, k, alpha_v, distribution=self.DISTRIBUTION)
+        bxdf = RoughConductorBxDF(
+            alpha_u, eta, k, alpha_v, distribution=self.DISTRIBUTION, masking="separable"
+        )
         return ScaledBxDF(bxdf, refl, refl)
 
 

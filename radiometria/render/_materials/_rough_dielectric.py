@@ -16,6 +16,7 @@ class RoughDielectric(AbstractMaterial):
     """Rough dielectric interfaces (Mitsuba's `roughdielectric`) with the Beckmann distribution
     (Mitsuba's default); `distribution="ggx"` gives `GGXRoughDielectric` (Trowbridge-Reitz),
     as `RoughConductor`. `sample_visible` is read; visible normals are always sampled.
+    Shadowing-masking is Smith's separable form, as in Mitsuba 3 (`RoughConductor`).
 
     **Fields:**
 
@@ -65,7 +66,9 @@ class RoughDielectric(AbstractMaterial):
             for a in (self.alpha_u, self.alpha_v)
         )
         return ScaledBxDF(
-            RoughDielectricBxDF(alpha_u, eta, alpha_v, distribution=self.DISTRIBUTION),
+            RoughDielectricBxDF(
+                alpha_u, eta, alpha_v, distribution=self.DISTRIBUTION, masking="separable"
+            ),
             self.specular_reflectance(row, wavelength_nm),
             self.specular_transmittance(row, wavelength_nm),
         )
