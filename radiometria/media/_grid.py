@@ -135,10 +135,19 @@ def _range_reduce(a: np.ndarray, axis: int, lo: np.ndarray, hi: np.ndarray, ufun
 
 
 def default_majorant_resolution(shape: tuple[int, int, int]) -> tuple[int, int, int]:
-    """The coarse majorant grid's cells `(Rz, Ry, Rx)` for a density grid of `shape`
-    `(Z, Y, X)`: about 2 voxels per cell, at most 16 per axis (`Pharr2023` uses 16^3). On
-    `benchmarks/bench_media.py`'s 16^3 grid, 4^3 to 16^3 cells render 1.6-2.2x faster than one
-    cell (the global majorant), the three within the noise of a loaded 2-core machine."""
+    """The coarse majorant grid's cells for a density grid: about 2 voxels per cell, at most
+    16 per axis (`Pharr2023` uses 16^3). On `benchmarks/bench_media.py`'s 16^3 grid, 4^3 to
+    16^3 cells render 1.6-2.2x faster than one cell (the global majorant), the three within
+    the noise of a loaded 2-core machine.
+
+    **Arguments:**
+
+    - `shape`: the density grid's voxels `(Z, Y, X)`. [1]
+
+    **Returns:**
+
+    The cells `(Rz, Ry, Rx)`, each in [1, 16]. [1]
+    """
     return tuple(int(min(16, max(1, -(-n // 2)))) for n in shape)
 
 
@@ -147,26 +156,24 @@ def coarse_majorant_grid(
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Per-cell bounds `(max, min)` of the trilinear density over a coarse grid of cells.
 
-        The unit box is split into $R_z	imes R_y	imes R_x$ equal cells; cell $c$ along an axis of
-        $N$ voxels spans $[c/R, (c+1)/R]$, where the trilinear lookup (`trilinear_lookup`) touches
-        the voxels $\lfloor cN/R - rac12
-    floor$ to $\lfloor (c+1)N/R - rac12
-    floor + 1$
-        (clamped). A trilinear value is a convex combination of its corner voxels, so the maximum
-        (minimum) of those voxels bounds the density everywhere in the cell from above (below):
-        the bounds are conservative, never just sampled.
+    The unit box is split into $R_z\times R_y\times R_x$ equal cells; cell $c$ along an axis of
+    $N$ voxels spans $[c/R, (c+1)/R]$, where the trilinear lookup (`trilinear_lookup`) touches
+    the voxels $\lfloor cN/R - \frac12 \rfloor$ to $\lfloor (c+1)N/R - \frac12 \rfloor + 1$
+    (clamped). A trilinear value is a convex combination of its corner voxels, so the maximum
+    (minimum) of those voxels bounds the density everywhere in the cell from above (below):
+    the bounds are conservative, never just sampled.
 
-        **Arguments:**
+    **Arguments:**
 
-        - `density`: concrete voxel grid `(Z, Y, X)`. [1]
-        - `resolution`: cells `(Rz, Ry, Rx)`, each >= 1 (default `default_majorant_resolution`).
+    - `density`: concrete voxel grid `(Z, Y, X)`. [1]
+    - `resolution`: cells `(Rz, Ry, Rx)`, each >= 1 (default `default_majorant_resolution`).
 
-        **Returns:**
+    **Returns:**
 
-        `(max_grid, min_grid)`, NumPy arrays of shape `(Rz, Ry, Rx)`. [1]
+    `(max_grid, min_grid)`, NumPy arrays of shape `(Rz, Ry, Rx)`. [1]
 
-        ??? cite "References"
-            `Pharr2023` §11.4.3 (`MajorantGrid`); `Novak2014` §4 (per-region majorants).
+    ??? cite "References"
+        `Pharr2023` §11.4.3 (`MajorantGrid`); `Novak2014` §4 (per-region majorants).
     """
     d = np.asarray(density, np.float64)
     res = default_majorant_resolution(d.shape) if resolution is None else tuple(resolution)

@@ -122,6 +122,10 @@ class RGBToSpectrumLUT(eqx.Module):
         self.resolution = int(res)
         self.refine_steps = int(refine_steps)
         self.colourspace = str(colourspace)
+        if self.refine_steps:
+            # The refinement's forward model, built now: tables are made eagerly (`load_lut`,
+            # `fit_lut`), and its colour-science data cannot be computed inside a trace.
+            forward_model(self.colourspace)
         self.scale = scale
         self.coeffs = coeffs
 

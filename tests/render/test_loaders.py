@@ -191,7 +191,7 @@ def _write(tmp_path, body: str):
          r"bad.xml:3: <texture>: missing attribute 'name'"),
         ('<scene>\n\n  <emitter type="projector"/>\n</scene>', r"bad.xml:3: .*unsupported emitter \(outside a <shape>\) type 'projector'"),  # noqa: E501
         ('<scene>\n  <volume/>\n</scene>', r"bad.xml:2: .*unsupported tag <volume>"),
-        ('<scene>\n  <bsdf type="principled"/>\n</scene>', r"bad.xml:2: .*unsupported BSDF type 'principled'"),  # noqa: E501
+        ('<scene>\n  <bsdf type="pplastic"/>\n</scene>', r"bad.xml:2: .*unsupported BSDF type 'pplastic'"),  # noqa: E501
         ('<scene>\n  <shape type="cube">\n   <float name="radius" value="1"/>\n  </shape>\n</scene>',  # noqa: E501
          r"bad.xml:3: .*unsupported parameter 'radius'"),
         ('<scene>\n  <shape type="cube">\n  </shap>\n</scene>', r"bad.xml:3:\d+: malformed XML"),
