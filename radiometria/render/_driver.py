@@ -44,9 +44,7 @@ XLA's deterministic ops are enabled).
 import functools
 import math
 import os
-import signal
 import sys
-import threading
 import time
 from dataclasses import dataclass
 
@@ -60,7 +58,12 @@ from tqdm import tqdm
 
 from .._checks import check_choice, check_positive_int
 from .._timing import mark
-from .._warmstart import exported_caller, exported_step_caller, uses_lapack
+from .._warmstart import (
+    Interrupts as _Interrupts,
+    exported_caller,
+    exported_step_caller,
+    uses_lapack,
+)
 from ..camera import (
     AbstractCamera,
     AbstractFilter,
@@ -732,29 +735,6 @@ class RenderInterrupted(KeyboardInterrupt):
         super().__init__(f"render interrupted by {signal_name} at {spp_reached} spp")
         self.signal_name, self.image = signal_name, image
         self.spp_reached, self.checkpoint = spp_reached, checkpoint
-
-
-class _Interrupts:
-    """Within `with`: SIGINT and SIGTERM set `received` instead of stopping the process at
-    once, so the render ends after the step in flight (main thread only; else a no-op)."""
-
-    def __init__(self):
-        self.received = None
-        self._old = {}
-
-    def _handle(self, signum, frame):
-        self.received = signal.Signals(signum).name
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._old[sig] = signal.signal(sig, self._handle)
-        return self
-
-    def __exit__(self, *exc):
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
-        return False
 
 
 def _layout(plan: _Plan, cfg: _Config) -> tuple[int, ...]:

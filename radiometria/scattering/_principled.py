@@ -39,6 +39,8 @@ slightly more than it receives (e.g. $\approx 1.016$ at normal incidence, roughn
 and the diffuse lobe at roughness 0 with $\eta$ = 1 are bounded by 1 (tested).
 """
 
+from typing import ClassVar
+
 import jax.numpy as jnp
 from jax import Array
 
@@ -128,7 +130,38 @@ def _normalize(v: Array) -> tuple[Array, Array]:
     return v / jnp.sqrt(jnp.where(ok, n2, 1.0)), ok[..., 0]
 
 
-class PrincipledBxDF(AbstractBxDF):
+class _AbstractPrincipled(AbstractBxDF):
+    """The two principled BxDFs' shared parameter handling: checked fields, then every
+    parameter broadcast against the directions at evaluation (`_params`)."""
+
+    _SCALARS: ClassVar[tuple[str, ...]] = ()
+
+    def _set(self, base_color, unit: dict, eta, luminance, rates: dict, **extra) -> None:
+        """Check and store `base_color` (>= 0), the `unit` parameters (in [0, 1]), `eta`
+        (> 0), `luminance` (default the mean of `base_color`), the sampling `rates` (>= 0) and
+        `extra` fields given as `name=(value, upper bound)`."""
+        c = _spectral(base_color, "base_color")
+        self.base_color = check_in_range(c, "base_color", 0.0, jnp.inf)
+        for name, value in unit.items():
+            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, 1.0))
+        for name, (value, upper) in extra.items():
+            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, upper))
+        e = as_float_array(eta, "eta")
+        self.eta = check_in_range(e, "eta", 0.0, jnp.inf, closed_lower=False)
+        lum = jnp.mean(self.base_color, axis=-1) if luminance is None else luminance
+        self.luminance = as_float_array(lum, "luminance")
+        for name, value in rates.items():
+            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, jnp.inf))
+
+    def _params(self, *items):
+        out = _broadcast(
+            *items, (self.base_color, 1), *((getattr(self, n), 0) for n in self._SCALARS)
+        )[1]
+        k = len(items)
+        return out[:k], dict(zip(("base_color", *self._SCALARS), out[k:], strict=True))
+
+
+class PrincipledBxDF(_AbstractPrincipled):
     r"""The principled (Disney) BSDF, lobe for lobe as Mitsuba 3's `principled` (module notes).
 
     Not two-sided: the diffuse, sheen and clearcoat lobes live on the front (+z) side; from
@@ -194,41 +227,24 @@ class PrincipledBxDF(AbstractBxDF):
         clearcoat_sampling_rate=1.0,
         diffuse_sampling_rate=1.0,
     ):
-        c = _spectral(base_color, "base_color")
-        self.base_color = check_in_range(c, "base_color", 0.0, jnp.inf)
         unit = {
             "roughness": roughness, "anisotropic": anisotropic, "metallic": metallic,
             "spec_trans": spec_trans, "spec_tint": spec_tint, "sheen": sheen,
             "sheen_tint": sheen_tint, "clearcoat": clearcoat,
             "clearcoat_gloss": clearcoat_gloss, "flatness": flatness,
         }  # fmt: skip
-        for name, value in unit.items():
-            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, 1.0))
-        e = as_float_array(eta, "eta")
-        self.eta = check_in_range(e, "eta", 0.0, jnp.inf, closed_lower=False)
-        lum = jnp.mean(self.base_color, axis=-1) if luminance is None else luminance
-        self.luminance = as_float_array(lum, "luminance")
         rates = {
             "specular_sampling_rate": specular_sampling_rate,
             "clearcoat_sampling_rate": clearcoat_sampling_rate,
             "diffuse_sampling_rate": diffuse_sampling_rate,
         }
-        for name, value in rates.items():
-            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, jnp.inf))
+        self._set(base_color, unit, eta, luminance, rates)
 
     _SCALARS = (
         "roughness", "anisotropic", "metallic", "spec_trans", "eta", "spec_tint", "sheen",
         "sheen_tint", "clearcoat", "clearcoat_gloss", "flatness", "luminance",
         "specular_sampling_rate", "clearcoat_sampling_rate", "diffuse_sampling_rate",
     )  # fmt: skip
-
-    def _params(self, *items):
-        out = _broadcast(
-            *items, (self.base_color, 1), *((getattr(self, n), 0) for n in self._SCALARS)
-        )[1]
-        k = len(items)
-        p = dict(zip(("base_color", *self._SCALARS), out[k:], strict=True))
-        return out[:k], p
 
     @staticmethod
     def _alphas(p) -> tuple[Array, Array]:
@@ -447,7 +463,7 @@ class PrincipledBxDF(AbstractBxDF):
         return _failed_or(ok, sample)
 
 
-class PrincipledThinBxDF(AbstractBxDF):
+class PrincipledThinBxDF(_AbstractPrincipled):
     r"""The thin principled BSDF, lobe for lobe as Mitsuba 3's `principledthin`: a
     two-dimensional sheet (leaves, paper, fabric), the same from both sides.
 
@@ -518,29 +534,18 @@ class PrincipledThinBxDF(AbstractBxDF):
         diffuse_reflectance_sampling_rate=1.0,
         diffuse_transmittance_sampling_rate=1.0,
     ):
-        c = _spectral(base_color, "base_color")
-        self.base_color = check_in_range(c, "base_color", 0.0, jnp.inf)
         unit = {
             "roughness": roughness, "anisotropic": anisotropic, "spec_trans": spec_trans,
             "spec_tint": spec_tint, "sheen": sheen, "sheen_tint": sheen_tint,
             "flatness": flatness,
         }  # fmt: skip
-        for name, value in unit.items():
-            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, 1.0))
-        dt = as_float_array(diff_trans, "diff_trans")
-        self.diff_trans = check_in_range(dt, "diff_trans", 0.0, 2.0)
-        e = as_float_array(eta, "eta")
-        self.eta = check_in_range(e, "eta", 0.0, jnp.inf, closed_lower=False)
-        lum = jnp.mean(self.base_color, axis=-1) if luminance is None else luminance
-        self.luminance = as_float_array(lum, "luminance")
         rates = {
             "specular_reflectance_sampling_rate": specular_reflectance_sampling_rate,
             "specular_transmittance_sampling_rate": specular_transmittance_sampling_rate,
             "diffuse_reflectance_sampling_rate": diffuse_reflectance_sampling_rate,
             "diffuse_transmittance_sampling_rate": diffuse_transmittance_sampling_rate,
         }
-        for name, value in rates.items():
-            setattr(self, name, check_in_range(as_float_array(value, name), name, 0.0, jnp.inf))
+        self._set(base_color, unit, eta, luminance, rates, diff_trans=(diff_trans, 2.0))
 
     _SCALARS = (
         "roughness", "anisotropic", "spec_trans", "diff_trans", "eta", "spec_tint", "sheen",
@@ -548,13 +553,6 @@ class PrincipledThinBxDF(AbstractBxDF):
         "specular_transmittance_sampling_rate", "diffuse_reflectance_sampling_rate",
         "diffuse_transmittance_sampling_rate",
     )  # fmt: skip
-
-    def _params(self, *items):
-        out = _broadcast(
-            *items, (self.base_color, 1), *((getattr(self, n), 0) for n in self._SCALARS)
-        )[1]
-        k = len(items)
-        return out[:k], dict(zip(("base_color", *self._SCALARS), out[k:], strict=True))
 
     @staticmethod
     def _alphas(p, scaled: bool) -> tuple[Array, Array]:
