@@ -53,6 +53,13 @@ def _has(params: Properties, name: str) -> bool:
     return value is not None and not (isinstance(value, int | float) and value == 0.0)
 
 
+def _base_color(params: Properties, where: str) -> AbstractTexture:
+    """`base_color` (default 0.5): a texture, or a constant upsampled as an albedo."""
+    color = params.get("base_color", 0.5)
+    base = texture_parameter(color, RGBAlbedoSpectrum, "base_color", where)
+    return ConstantTexture.from_values([color], RGBAlbedoSpectrum) if base is None else base
+
+
 class Principled(AbstractMaterial):
     """The principled (Disney) BSDF as Mitsuba 3's `principled`.
 
@@ -104,10 +111,7 @@ class Principled(AbstractMaterial):
     @classmethod
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
         unknown_parameters(params, cls, where)
-        color = params.get("base_color", 0.5)
-        base = texture_parameter(color, RGBAlbedoSpectrum, "base_color", where)
-        if base is None:
-            base = ConstantTexture.from_values([color], RGBAlbedoSpectrum)
+        base = _base_color(params, where)
         scalars = {
             name: scalar_texture(params.get(name, default), name, where)
             for name, default in _SCALARS.items()
@@ -224,10 +228,7 @@ class PrincipledThin(AbstractMaterial):
     @classmethod
     def from_properties(cls, params: Properties, *, two_sided=True, where="scene"):
         unknown_parameters(params, cls, where)
-        color = params.get("base_color", 0.5)
-        base = texture_parameter(color, RGBAlbedoSpectrum, "base_color", where)
-        if base is None:
-            base = ConstantTexture.from_values([color], RGBAlbedoSpectrum)
+        base = _base_color(params, where)
         scalars = [
             scalar_texture(params.get(name, default), name, where)
             for name, default in _THIN_SCALARS.items()
