@@ -169,7 +169,10 @@ class RenderScene(eqx.Module):
             # The bounding sphere of the geometry sets the power of lights at infinity.
             lo, hi = (vertices.min(axis=0), vertices.max(axis=0)) if len(vertices) else (0, 0)
             radius = max(float(np.linalg.norm(np.asarray(hi) - lo)) / 2.0, 1e-4)
-            light = LightSet.from_lights([light, *lights], scene_radius=radius, dtype=dtype)
+            center = (np.asarray(lo, float) + np.asarray(hi, float)) / 2.0
+            light = LightSet.from_lights(
+                [light, *lights], scene_radius=radius, scene_center=center, dtype=dtype
+            )
         if not isinstance(accelerator, AbstractAccelerator):
             accelerator = build_accelerator(vertices, faces, kind=accelerator, dtype=dtype)
         media_fields = _media_fields(media, face_interior, face_exterior, camera_medium, n_faces)

@@ -334,3 +334,65 @@ def test_float_emission_is_a_grey_illuminant_as_in_mitsuba(tmp_path):
     (emitter,) = desc.emitters
     assert isinstance(emitter.radiance, LinearRGB)
     np.testing.assert_array_equal(emitter.radiance.rgb, [2.0, 2.0, 2.0])
+
+
+# Light tracing (`ptracer`, issue 14) from lights at infinity: emitted rays start on a disk of
+# the scene's bounding-sphere radius R across their direction. A plane of half-size S has
+# R = S sqrt(2) (half its bounding box's diagonal, as RenderScene computes it).
+_PT_HALF = 1.8  # the plane's half-size: just covers the view (half-width 3 tan 30 = 1.73)
+
+
+def _ptracer_check(image, expected, spp, hits_per_pixel, what):
+    """`_check_image` with the per-sample spread of light tracing: a pixel's estimate is a
+    sum over the light paths that land in its footprint (Poisson with mean `hits_per_pixel`,
+    each of nearly the same value), so its relative variance is ~1/hits, plus the spectral
+    noise; written as the `sample_sd` of `spp` samples (1.5x margin on the variance for the
+    camera importance's spread over a pixel)."""
+    sample_sd = np.sqrt(1.5 * spp / hits_per_pixel + _SPECTRAL_SD**2)
+    mean_rtol = 5.0 * sample_sd / np.sqrt(spp * SIZE * SIZE)
+    _check_image(image, expected, spp, what, mean_rtol=mean_rtol, sample_sd=sample_sd)
+
+
+def _pt_scene(light):
+    text = _scene(light, integrator="ptracer")
+    return text.replace('<scale value="10"/>', f'<scale value="{_PT_HALF}"/>')
+
+
+def _pixel_area() -> float:
+    return (2.0 * HEIGHT * np.tan(np.radians(FOV) / 2) / SIZE) ** 2
+
+
+def test_ptracer_directional_light_closed_form(tmp_path):
+    # L = rho/pi E cos(30 deg) everywhere; a light path lands in a pixel's footprint with
+    # probability A_pix cos(30 deg) / (pi R^2) (uniform origins on the disk).
+    e, spp = 2.0, 64
+    d = np.array([np.sin(np.radians(30.0)), 0.0, -np.cos(np.radians(30.0))])
+    light = (
+        '<emitter type="directional">'
+        f'<vector name="direction" x="{d[0]}" y="{d[1]}" z="{d[2]}"/>'
+        f'<rgb name="irradiance" value="{e}"/></emitter>'
+    )
+    image = _render(_write(tmp_path, _pt_scene(light)), spp=spp)
+    r2 = 2.0 * _PT_HALF**2
+    hits = spp * SIZE * SIZE * _pixel_area() * np.cos(np.radians(30.0)) / (np.pi * r2)
+    expected = _constant(RHO / np.pi * e * np.cos(np.radians(30.0)))
+    _ptracer_check(image, expected, spp, hits, "ptracer directional")
+
+
+def test_ptracer_constant_environment_closed_form(tmp_path):
+    # The plane sees the whole upper hemisphere of sky and nothing else: L = rho L_env. Rays
+    # from the disk with uniform directions reach a footprint's front with probability
+    # A_pix E[max(cos, 0)] / (pi R^2) = A_pix / (4 pi R^2).
+    l_env, spp = 1.5, 256
+    light = f'<emitter type="constant"><rgb name="radiance" value="{l_env}"/></emitter>'
+    image = _render(_write(tmp_path, _pt_scene(light)), spp=spp)
+    r2 = 2.0 * _PT_HALF**2
+    hits = spp * SIZE * SIZE * _pixel_area() / (4.0 * np.pi * r2)
+    _ptracer_check(image, _constant(RHO * l_env), spp, hits, "ptracer constant")
+
+
+def test_bdpt_refuses_lights_at_infinity(tmp_path):
+    light = '<emitter type="constant"><rgb name="radiance" value="1"/></emitter>'
+    path = _write(tmp_path, _scene(light, integrator="bdpt"))
+    with pytest.raises(ValueError, match="constant"):
+        _render(path, spp=1)

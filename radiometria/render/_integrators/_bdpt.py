@@ -45,7 +45,8 @@ normalisation (`radiometria.render.render`, the `ptracer` module's "Normalisatio
 weight per slot is the filter's film integral $F_j$, pbrt-v4's $1/\mathrm{spp}$ splat scale).
 
 **Not handled:** participating media (a scene with media is refused: use `volpath`), lights at
-infinity and directional lights (they cannot start light paths: `sample_le` refuses them).
+infinity and directional lights (refused with a `ValueError`: their vertices at infinity need
+solid-angle densities in the MIS weights; `ptracer` and `path` render them).
 
 The variates of a slot are `[BSDF u0, u1 | lobe, roulette]` for each camera-subpath
 scattering vertex ($z_1 \dots z_{D-1}$, $D$ = `max_depth`), then `[point u0, u1 | direction
@@ -79,6 +80,10 @@ __all__ = ["BDPT", "HEURISTICS", "bdpt_mis_weight", "bdpt_sample_dimensions"]
 HEURISTICS = ("balance", "power")
 _EMISSION_DIMENSIONS = 8
 _DIMENSIONS_PER_VERTEX = 4
+
+
+# Lights whose MIS densities bdpt does not model yet (vertices at infinity).
+_LIGHTS_AT_INFINITY = frozenset({"directional", "constant", "envmap"})
 
 
 def bdpt_sample_dimensions(max_depth: int) -> int:
@@ -553,6 +558,13 @@ class BDPT(AbstractIntegrator):
             raise ValueError(
                 "bdpt does not handle participating media (the scene has media); render it "
                 "with the 'volpath' integrator."
+            )
+        lights = getattr(scene.light, "lights", (scene.light,))
+        at_infinity = [lt.NAME for lt in lights if lt.NAME in _LIGHTS_AT_INFINITY]
+        if at_infinity:
+            raise ValueError(
+                f"bdpt does not handle the {at_infinity[0]!r} light yet (lights at infinity "
+                "and directional lights); render the scene with 'path' or 'ptracer'."
             )
         cam, lv, ue, light_delta = self._subpaths(
             scene, camera, origins, directions, wavelength_nm, variates, active

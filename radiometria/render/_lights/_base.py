@@ -8,7 +8,10 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
-__all__ = ["AbstractLight", "EmissionSample", "LightSample"]
+from ...montecarlo import sample_uniform_disk_concentric
+from ...scattering import coordinate_system
+
+__all__ = ["AbstractLight", "EmissionSample", "LightSample", "emission_at_infinity"]
 
 
 class LightSample(eqx.Module):
@@ -192,3 +195,44 @@ class AbstractLight(eqx.Module):
         for picking among lights (NumPy, outside `jit`). Lights at infinity and directional
         lights count what falls on a disk of radius `scene_radius` [scene units] (pbrt's
         convention). [W nm^-1, or the scene's emission unit x area]"""
+
+
+def emission_at_infinity(
+    d: Float[Array, "n 3"],
+    u_pos: Float[Array, "n 2"],
+    center: Float[Array, " 3"],
+    radius: float,
+    le: Float[Array, "n k"],
+    pdf_dir: Float[Array, " n"],
+    pick_prob: Float[Array, " n"],
+) -> EmissionSample:
+    r"""An emitted ray of a light at infinity (or a directional light) travelling along the
+    unit directions `d`: its origin uniform on the disk of radius `radius` [scene units]
+    about `center` perpendicular to `d`, one radius behind the bounding sphere, so the ray
+    crosses the whole scene (pbrt-v4's `SampleLe` of distant and infinite lights).
+
+    `pdf_pos` is $P / (\pi r^2)$ [m^-2] with `pick_prob` $P$, `pdf_dir` the given solid-angle
+    density of `d` [sr^-1] (1 for a delta direction), and `n = d` (the disk's normal, so the
+    throughput $L_e |n \cdot d| / (p_A p_\omega)$ has no cosine). The camera never sees the
+    disk, so `le_observer` and `pdf_dir_observer` are 0.
+
+    ??? cite "References"
+        `Pharr2023` §12.4 (distant lights), §12.5 (infinite lights' `SampleLe`).
+    """
+    dtype = d.dtype
+    s, t = coordinate_system(d)
+    disk = sample_uniform_disk_concentric(u_pos, check=False).astype(dtype)
+    p = center[None, :] + radius * (disk[:, 0:1] * s + disk[:, 1:2] * t - d)
+    n = d.shape[0]
+    zero = jnp.zeros((n,), dtype)
+    return EmissionSample(
+        p=p,
+        n=d,
+        d=d,
+        le=le,
+        pdf_pos=pick_prob / (jnp.pi * radius * radius),
+        pdf_dir=pdf_dir,
+        le_observer=jnp.zeros_like(le),
+        delta_pos=jnp.zeros((n,), bool),
+        pdf_dir_observer=zero,
+    )

@@ -1,14 +1,16 @@
 """A constant environment (Mitsuba's `constant` emitter): the same radiance from everywhere."""
 
+import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array, Float
 
 from ...montecarlo import sample_uniform_sphere
 from .._spectral import SpectrumTable
-from ._base import LightSample
+from ._base import LightSample, emission_at_infinity
 from ._common import AbstractSurfacelessLight, illuminant_table, spectral_param
 
 
@@ -24,6 +26,8 @@ class ConstantLight(AbstractSurfacelessLight):
 
     - `radiance`: `SpectrumTable` with one row. [W m^-2 sr^-1 nm^-1]
     - `mean_radiance`: its mean over the 1 nm grid (static). [W m^-2 sr^-1 nm^-1]
+    - `bound_center`, `bound_radius`: the scene's bounding sphere (`with_bounds`), where
+        emitted rays start (`sample_le`); `None` / 0 until set. [scene units]
 
     !!! note "Thesis"
         Chapter 8 (light sources); eq. 1.13 (radiance).
@@ -36,6 +40,15 @@ class ConstantLight(AbstractSurfacelessLight):
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"radiance"})
     radiance: SpectrumTable
     mean_radiance: float = eqx.field(static=True)
+    bound_center: Float[Array, " 3"] | None = None
+    bound_radius: float = eqx.field(static=True, default=0.0)
+
+    def with_bounds(self, center, radius: float) -> "ConstantLight":
+        """The same light knowing the scene's bounding sphere (`center` `(3,)`, `radius`)
+        [scene units], so it can start light paths."""
+        return dataclasses.replace(
+            self, bound_center=jnp.asarray(center, jnp.float32), bound_radius=radius
+        )
 
     @classmethod
     def from_properties(
@@ -68,6 +81,26 @@ class ConstantLight(AbstractSurfacelessLight):
 
     def pdf_escaped(self, directions):
         return jnp.full(directions.shape[:-1], 1.0 / (4.0 * np.pi), directions.dtype)
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray: a direction uniform on the sphere (`u_dir`, `pdf_dir` $1/4\\pi$)
+        travelling inwards, from a point uniform on the disk of the scene's radius across it
+        (`u_pos`), so the throughput is $4\\pi \\cdot \\pi r^2 L$."""
+        if self.bound_center is None:
+            raise ValueError("a constant environment needs the scene's bounds (`with_bounds`).")
+        dtype = observer.dtype
+        n = observer.shape[0]
+        d = -sample_uniform_sphere(u_dir, check=False).astype(dtype)
+        pdf_dir = jnp.full((n,), 1.0 / (4.0 * np.pi), dtype)
+        return emission_at_infinity(
+            d,
+            u_pos,
+            self.bound_center.astype(dtype),
+            self.bound_radius,
+            self._le(n, wavelength_nm),
+            pdf_dir,
+            jnp.ones((n,), dtype),
+        )
 
     def power(self, scene_radius: float) -> float:
         return float(4.0 * np.pi**2 * scene_radius**2 * self.mean_radiance)

@@ -1,5 +1,6 @@
 """Directional lights (Mitsuba's `directional` emitter): parallel light from infinity."""
 
+import dataclasses
 from typing import ClassVar
 
 import equinox as eqx
@@ -8,7 +9,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._spectral import SpectrumTable
-from ._base import LightSample
+from ._base import LightSample, emission_at_infinity
 from ._common import (
     AbstractDeltaLight,
     illuminant_table,
@@ -33,6 +34,8 @@ class DirectionalLight(AbstractDeltaLight):
     - `irradiance`: `SpectrumTable`, one row per light. [W m^-2 nm^-1]
     - `cdf`: `(m,)` cumulative probabilities; `mean_irradiance`: summed mean irradiance
         (static). [W m^-2 nm^-1]
+    - `bound_center`, `bound_radius`: the scene's bounding sphere (`with_bounds`), where
+        emitted rays start (`sample_le`); `None` / 0 until set. [scene units]
 
     !!! note "Thesis"
         Chapter 8 (light sources); eq. 1.6-1.9 (irradiance).
@@ -47,6 +50,15 @@ class DirectionalLight(AbstractDeltaLight):
     irradiance: SpectrumTable
     cdf: Float[Array, " m"]
     mean_irradiance: float = eqx.field(static=True)
+    bound_center: Float[Array, " 3"] | None = None
+    bound_radius: float = eqx.field(static=True, default=0.0)
+
+    def with_bounds(self, center, radius: float) -> "DirectionalLight":
+        """The same lights knowing the scene's bounding sphere (`center` `(3,)`, `radius`)
+        [scene units], so they can start light paths."""
+        return dataclasses.replace(
+            self, bound_center=jnp.asarray(center, self.direction.dtype), bound_radius=radius
+        )
 
     @classmethod
     def from_properties(
@@ -81,6 +93,18 @@ class DirectionalLight(AbstractDeltaLight):
             pdf=prob,
             delta=jnp.ones((n,), bool),
         )
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray: a light by irradiance (`u_select`), its direction (a delta,
+        `pdf_dir = 1`) and an origin uniform on the disk of the scene's radius across it
+        (`u_pos`), so the throughput is $\\pi r^2 E$."""
+        if self.bound_center is None:
+            raise ValueError("a directional light needs the scene's bounds (`with_bounds`).")
+        j, prob, _ = pick_row(self.cdf, u_select)
+        d = self.direction[j].astype(observer.dtype)
+        le = self.irradiance(j, wavelength_nm)
+        one = jnp.ones(prob.shape, observer.dtype)
+        return emission_at_infinity(d, u_pos, self.bound_center, self.bound_radius, le, one, prob)
 
     def power(self, scene_radius: float) -> float:
         return float(np.pi * scene_radius**2 * self.mean_irradiance)

@@ -15,6 +15,7 @@ per unit area of $(u, v)$ into one per solid angle with the Jacobian
 $d\omega = 2\pi^2 \sin\theta\, du\, dv$.
 """
 
+import dataclasses
 from pathlib import Path
 from typing import ClassVar
 
@@ -33,7 +34,7 @@ from ...upsampling import (
     sigmoid_polynomial_jakob2019,
 )
 from .._spectral import SpectrumTable, wavelength_grid_nm
-from ._base import LightSample
+from ._base import LightSample, emission_at_infinity
 from ._common import AbstractSurfacelessLight, to_world_param
 
 __all__ = ["EnvironmentLight", "read_envmap"]
@@ -100,6 +101,8 @@ class EnvironmentLight(AbstractSurfacelessLight):
     - `distribution`: `PiecewiseConstant2D` over the `(H - 1, W)` cells.
     - `to_world`, `world_to_local`: `(3, 3)` the frame and its inverse.
     - `integral`: $\int L_Y\, d\omega$ of the map's luminance (static, for the power).
+    - `bound_center`, `bound_radius`: the scene's bounding sphere (`with_bounds`), where
+        emitted rays start (`sample_le`); `None` / 0 until set. [scene units]
 
     !!! note "Thesis"
         Chapter 8 (light sources); chapters 5-6 (importance sampling); section 2.2.3.
@@ -118,6 +121,15 @@ class EnvironmentLight(AbstractSurfacelessLight):
     to_world: Float[Array, "3 3"]
     world_to_local: Float[Array, "3 3"]
     integral: float = eqx.field(static=True)
+    bound_center: Float[Array, " 3"] | None = None
+    bound_radius: float = eqx.field(static=True, default=0.0)
+
+    def with_bounds(self, center, radius: float) -> "EnvironmentLight":
+        """The same light knowing the scene's bounding sphere (`center` `(3,)`, `radius`)
+        [scene units], so it can start light paths."""
+        return dataclasses.replace(
+            self, bound_center=jnp.asarray(center, self.to_world.dtype), bound_radius=radius
+        )
 
     @classmethod
     def from_rgb(
@@ -268,6 +280,25 @@ class EnvironmentLight(AbstractSurfacelessLight):
         cell_uv = jnp.stack([jnp.mod(uv[:, 0] - 0.5 / w, 1.0), uv[:, 1]], axis=-1)
         pdf = self._pdf_uv_to_solid_angle(self.distribution.pdf(cell_uv), sin_theta)
         return pdf.astype(directions.dtype)
+
+    def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):
+        """An emitted ray: a direction from the map's distribution (`u_dir`, the density
+        of `sample_li` and `pdf_escaped`) travelling inwards, from a point uniform on the
+        disk of the scene's radius across it (`u_pos`)."""
+        if self.bound_center is None:
+            raise ValueError("an envmap light needs the scene's bounds (`with_bounds`).")
+        dtype = observer.dtype
+        ls = self.sample_li(observer, u_select, u_dir, wavelength_nm)
+        n = observer.shape[0]
+        return emission_at_infinity(
+            -ls.wi,
+            u_pos,
+            self.bound_center.astype(dtype),
+            self.bound_radius,
+            ls.radiance,
+            ls.pdf,
+            jnp.ones((n,), dtype),
+        )
 
     def power(self, scene_radius: float) -> float:
         return float(np.pi * scene_radius**2 * self.integral)

@@ -63,7 +63,12 @@ class LightSet(AbstractLight):
 
     @classmethod
     def from_lights(
-        cls, lights: "list[AbstractLight]", *, scene_radius: float, dtype=jnp.float32
+        cls,
+        lights: "list[AbstractLight]",
+        *,
+        scene_radius: float,
+        scene_center=None,
+        dtype=jnp.float32,
     ) -> "LightSet":
         """Group light plugins, with selection probabilities by power (NumPy, outside `jit`).
 
@@ -72,8 +77,16 @@ class LightSet(AbstractLight):
         - `lights`: the plugins (at most one `AreaLight`, at most one light at infinity).
         - `scene_radius`: radius of the scene's bounding sphere, for the power of lights
             at infinity. [scene units]
+        - `scene_center`: `(3,)` centre of that sphere (default: the origin); lights at
+            infinity and directional lights start their emitted rays (`sample_le`) on a
+            disk of `scene_radius` about it. [scene units]
         """
         lights = list(lights)
+        center = np.zeros(3) if scene_center is None else np.asarray(scene_center, float)
+        lights = [
+            lt.with_bounds(center, float(scene_radius)) if hasattr(lt, "with_bounds") else lt
+            for lt in lights
+        ]
         if not lights:
             raise ValueError("a LightSet needs at least one light plugin.")
         for light in lights:
