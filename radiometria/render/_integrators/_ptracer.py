@@ -15,7 +15,14 @@ non-symmetric correction for shading normals; $W_e$ the camera's importance and
 $p_\mathrm{cam} = d^2/\cos\theta_\mathrm{cam}$ the pinhole's density per solid angle). The
 light's own point is splatted the same way (depth 0, $L_e |\cos\theta_l| W_e / (p_A
 p_\mathrm{cam})$) unless `hide_emitters`; delta lights (point, spot) are not, since a camera
-ray can never hit them and the path tracer does not see them either. Continuing the path
+ray can never hit them and the path tracer does not see them either.
+
+**Lights at infinity** (`constant`, `envmap`) and **directional** lights start their paths
+on a disk of the scene's bounding-sphere radius $r$ across the emitted direction, one radius
+behind the sphere ($p_A = 1/\pi r^2$; the direction's density is the light's, 1 for a
+directional light), so $\beta_0 = L_e / (p_A\,p_\omega)$ (pbrt-v4's `SampleLe`). Their
+depth-0 splat is 0: light tracing does not estimate the environment seen directly by the
+camera (render that with `path`). Continuing the path
 samples the BSDF in importance mode, $\beta \mathrel{*}= f |\omega\cdot n_g|
 |\omega_\mathrm{light}\cdot n_s| / (|\omega_\mathrm{light}\cdot n_g|\,p)$, with Russian
 roulette after `rr_depth` segments on the throughput relative to the emitted one.
@@ -106,9 +113,11 @@ class PTracer(AbstractIntegrator):
     - `rr_depth`: segments after which Russian roulette starts (default 5).
     - `hide_emitters`: do not splat the emitters' own points (emitters seen directly).
 
-    It needs a camera with `sample_wi` (the pinhole camera) and lights with `sample_le`
-    (area, point, spot); it is rendered through `radiometria.render.render`, which gives it
-    the camera. `radiance` (per camera ray) is 0: all of its estimate is in the splats.
+    It needs a camera with `sample_wi` (the pinhole camera); every light kind starts light
+    paths (area, point, spot, directional, constant, envmap; the environment seen directly
+    is not estimated, module docstring); it is rendered through
+    `radiometria.render.render`, which gives it the camera. `radiance` (per camera ray) is
+    0: all of its estimate is in the splats.
 
     !!! note "Thesis"
         Chapter 9 (bidirectional methods; title only in the text).
