@@ -391,8 +391,10 @@ def test_ptracer_constant_environment_closed_form(tmp_path):
     _ptracer_check(image, _constant(RHO * l_env), spp, hits, "ptracer constant")
 
 
-def test_bdpt_refuses_lights_at_infinity(tmp_path):
-    light = '<emitter type="constant"><rgb name="radiance" value="1"/></emitter>'
-    path = _write(tmp_path, _scene(light, integrator="bdpt"))
-    with pytest.raises(ValueError, match="constant"):
+@pytest.mark.parametrize("integrator", ["bdpt", "pssmlt"])
+@pytest.mark.parametrize("kind", ["constant", "directional"])
+def test_bdpt_refuses_lights_at_infinity(tmp_path, integrator, kind):
+    light = f'<emitter type="{kind}"/>'
+    path = _write(tmp_path, _scene(light, integrator=integrator))
+    with pytest.raises(ValueError, match=kind):
         _render(path, spp=1)

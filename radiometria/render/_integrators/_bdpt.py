@@ -196,8 +196,9 @@ class BDPT(AbstractIntegrator):
         the one-segment paths).
     - `heuristic`: `"power"` (default, pbrt's) or `"balance"` (`Veach1997` eq. 10.9).
 
-    It needs a camera with `sample_wi` (the pinhole camera) and lights with `sample_le`
-    (area, point, spot) and refuses scenes with participating media; it is rendered through
+    It needs a camera with `sample_wi` (the pinhole camera) and area, point or spot lights
+    (scenes with directional lights or lights at infinity raise `ValueError`, as do scenes
+    with participating media); it is rendered through
     `radiometria.render.render`, which calls `radiance_and_splats`.
 
     !!! note "Thesis"
