@@ -26,6 +26,10 @@ def _compilation_cache_in_tmp(monkeypatch, tmp_path_factory):
     monkeypatch.delenv("RADIOMETRIA_NO_CACHE", raising=False)
     monkeypatch.setattr(_cache, "enable_compilation_cache", lambda *args, **kwargs: None)
     monkeypatch.setattr(_warmstart, "enable_jax_cache", lambda *args, **kwargs: None)
+    # In this process no step entry is written or loaded: loading one registers the native
+    # kernels again and patches JAX's lowering, state that outlives the command (a worker
+    # that ran it crashed later in unrelated tests). Subprocesses use the cache as users do.
+    monkeypatch.setattr(_warmstart, "cache_disabled", lambda: True)
 
 
 def _command() -> list[str]:
