@@ -38,7 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._checks import as_float_array, check_last_axis
+from .._checks import as_float_array, check_last_axis, check_positive_int
 from ._forward import forward_model
 from ._lm import ModelArrays, _lm_direction, lm_init, lm_iterate, target_Lab
 from ._sigmoid_polynomial import (
@@ -113,14 +113,8 @@ class RGBToSpectrumLUT(eqx.Module):
                 f"`coeffs` must have shape (3, res, res, res, 3) = {(3, res, res, res, 3)} for "
                 f"res = {res}, got {coeffs.shape}."
             )
-        if (
-            isinstance(refine_steps, bool)
-            or not isinstance(refine_steps, int | np.integer)
-            or refine_steps < 0
-        ):
-            raise ValueError(f"`refine_steps` must be an int >= 0, got {refine_steps!r}.")
         self.resolution = int(res)
-        self.refine_steps = int(refine_steps)
+        self.refine_steps = check_positive_int(refine_steps, "refine_steps", minimum=0)
         self.colourspace = str(colourspace)
         if self.refine_steps:
             # The refinement's forward model, built now: tables are made eagerly (`load_lut`,
@@ -253,11 +247,17 @@ def _refine(lut: RGBToSpectrumLUT, rgb: Array, c_nm: Array) -> Array:
     start = sg(nm_to_normalised_coefficients(c_nm))
     start = jnp.where(jnp.isfinite(start), start, 0.0)
     n = lut.refine_steps + 1  # the first iteration evaluates the start point
-    a = lm_iterate(lm_init(start), sg(lab_t), m, n)
-    b = lm_iterate(lm_init(jnp.zeros_like(start)), sg(lab_t), m, n)
-    first = (a.cost <= b.cost) | ~jnp.isfinite(b.cost)
-    c = jnp.where(first[:, None], a.c, b.c)
-    J = jnp.where(first[:, None, None], a.J, b.J)
+    # Both starts in one batch (rows are independent): one compiled copy of the iteration.
+    k = start.shape[0]
+    both = lm_iterate(
+        lm_init(jnp.concatenate([start, jnp.zeros_like(start)])),
+        jnp.concatenate([sg(lab_t), sg(lab_t)]),
+        m,
+        n,
+    )
+    first = (both.cost[:k] <= both.cost[k:]) | ~jnp.isfinite(both.cost[k:])
+    c = jnp.where(first[:, None], both.c[:k], both.c[k:])
+    J = jnp.where(first[:, None, None], both.J[:k], both.J[k:])
     # dc = J^+ d Lab_t: the least-squares step for the residual change -(Lab_t - sg(Lab_t)).
     step = _lm_direction(J, sg(lab_t) - lab_t, jnp.zeros(c.shape[:1], dtype))
     return normalised_to_nm_coefficients(c + step).astype(dtype)
