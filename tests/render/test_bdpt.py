@@ -7,35 +7,40 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from radiometria.camera import BoxFilter, read_exr
+from radiometria.camera import BoxFilter, read_exr, write_exr
 from radiometria.cli import main
 from radiometria.montecarlo import pixel_z_test
 from radiometria.render import OwenSobol, Path, bdpt_strategy_images, render
 from radiometria.render._integrators import BDPT, bdpt_mis_weight
 
 from ._mitsuba import cornell_box_materials_xml
+from .test_envmap import _CARD, _colour_map, _envmap, _scene as _envmap_scene
 from .test_ptracer import _cornell_light_coverage, _cornell_light_luminance
 
 # -- MIS weights --------------------------------------------------------------------------
 
 
-def _reference_weights(p_cam, p_light, delta, light_delta, beta):
+def _reference_weights(p_cam, p_light, delta, light_delta, beta, light_infinite=False):
     """Weights of every strategy (s, t) of one path x_0 (camera) .. x_m (light) straight from
     Veach's definition w = p_st^beta / sum_i p_i^beta (eq. 10.9), p_st = prod_{i<t} p_cam[i]
     prod_{i>=t} p_light[i]; a strategy is impossible (p = 0) when it connects through a delta
-    vertex (x_{t-1} or x_t) or has to hit a delta light (s = 0)."""
+    vertex (x_{t-1} or x_t), has to hit a delta light (s = 0), or joins the camera to a light
+    at infinity ((1, 1))."""
     m = len(p_cam) - 1
     p = {}
     for t in range(1, m + 2):
         s = m + 1 - t
         ok = not (t - 1 >= 1 and delta[t - 1]) and not (s >= 1 and t <= m and delta[t])
         ok = ok and not (s == 0 and light_delta)
+        ok = ok and not (s == 1 and t == 1 and light_infinite)
         p[(s, t)] = np.prod(p_cam[:t]) * np.prod(p_light[t:]) if ok else 0.0
     total = sum(v**beta for v in p.values())
+    if total == 0:  # no strategy can sample the path (a directional light seen directly)
+        return {}
     return {st: v**beta / total for st, v in p.items()}
 
 
-def _ours(p_cam, p_light, delta, light_delta, s, t, heuristic):
+def _ours(p_cam, p_light, delta, light_delta, s, t, heuristic, light_infinite=False):
     """`bdpt_mis_weight` for strategy (s, t) of the same path, in the subpath layout the
     integrator builds: camera vertices z_j = x_j (fwd: camera-side densities), light vertices
     y_j = x_{m-j} (fwd: light-side densities), padded with junk beyond the strategy."""
@@ -57,6 +62,7 @@ def _ours(p_cam, p_light, delta, light_delta, s, t, heuristic):
     w = bdpt_mis_weight(
         col(fwd_c), col(rev_c), col(delta_c, bool), t, col(fwd_l), col(rev_l),
         col(delta_l, bool), jnp.asarray([light_delta]), s, heuristic=heuristic,
+        light_infinite=jnp.asarray([light_infinite]),
     )  # fmt: skip
     return float(w[0])
 
@@ -64,8 +70,9 @@ def _ours(p_cam, p_light, delta, light_delta, s, t, heuristic):
 @pytest.mark.parametrize("heuristic", ["balance", "power"])
 def test_bdpt_mis_weights_sum_to_one_and_match_the_definition(heuristic):
     # Random paths of 2..6 vertices with random densities (spanning 6 decades), random
-    # specular vertices and delta lights: each strategy's weight by the ratio recursion equals
-    # Veach's p^beta / sum p^beta, and the weights of all strategies sum to 1.
+    # specular vertices, delta lights and lights at infinity: each strategy's weight by the
+    # ratio recursion equals Veach's p^beta / sum p^beta, and the weights of all strategies
+    # sum to 1.
     beta = 2 if heuristic == "power" else 1
     rng = np.random.default_rng(1)
     for trial in range(60):
@@ -76,14 +83,16 @@ def test_bdpt_mis_weights_sum_to_one_and_match_the_definition(heuristic):
         delta = rng.uniform(size=m + 1) < 0.25
         delta[0] = delta[m] = False  # the end points are not specular surfaces
         light_delta = bool(rng.uniform() < 0.3)
-        ref = _reference_weights(p_cam, p_light, delta, light_delta, beta)
+        infinite = bool(rng.uniform() < 0.3)
+        ref = _reference_weights(p_cam, p_light, delta, light_delta, beta, infinite)
         ours = {}
         for (s, t), w_ref in ref.items():
             if w_ref == 0:  # impossible strategy: the integrator never evaluates it
                 continue
-            ours[(s, t)] = _ours(p_cam, p_light, delta, light_delta, s, t, heuristic)
+            ours[(s, t)] = _ours(p_cam, p_light, delta, light_delta, s, t, heuristic, infinite)
             np.testing.assert_allclose(ours[(s, t)], w_ref, rtol=1e-9, err_msg=str((s, t, m)))
-        np.testing.assert_allclose(sum(ours.values()), 1.0, rtol=1e-9)
+        if ref:
+            np.testing.assert_allclose(sum(ours.values()), 1.0, rtol=1e-9)
 
 
 def test_bdpt_mis_weight_negative_control():
@@ -190,6 +199,42 @@ def test_bdpt_agrees_with_path_on_specular_scene(tmp_path):
     result = _z_test(ours, var, ref, var_ref, n * spp)
     assert result.passed, result.message
     np.testing.assert_allclose(ours.mean(axis=(0, 1)), ref.mean(axis=(0, 1)), rtol=0.04)
+
+
+def _sky_scene(tmp_path):
+    """A colour environment map seen directly around a tilted diffuse card and a rough gold
+    sphere on a grey floor, with a directional light: the lights at infinity of issue 14."""
+    exr = write_exr(tmp_path / "sky.exr", _colour_map())
+    sun = ('<emitter type="directional"><vector name="direction" x="0.3" y="0.2" z="-1"/>'
+           '<rgb name="irradiance" value="1.5"/></emitter>')  # fmt: skip
+    body = (
+        _CARD + '<shape type="rectangle"><transform name="to_world"><scale value="1.2"/>'
+        '<translate z="-0.6"/></transform><bsdf type="diffuse"><rgb name="reflectance" '
+        'value="0.4"/></bsdf></shape>'
+        '<shape type="sphere"><point name="center" x="0.45" y="0.35" z="0.35"/><float '
+        'name="radius" value="0.25"/><bsdf type="roughconductor"><string name="material" '
+        'value="Au"/><float name="alpha" value="0.3"/></bsdf></shape>' + sun
+    )
+    path = tmp_path / "sky.xml"
+    path.write_text(_envmap_scene(_envmap(exr), body, size=10))
+    return path
+
+
+@pytest.mark.slow
+def test_bdpt_agrees_with_path_under_lights_at_infinity(tmp_path):
+    # An environment map (seen directly: strategy (0, 2) alone, as (1, 1) cannot reach a point
+    # at infinity), escaped camera rays weighted against next-event estimation of the map's
+    # directions and against light paths from the scene's disk, and a directional light (a
+    # delta light at infinity). A 5 % brighter image fails the same test.
+    scene = _sky_scene(tmp_path)
+    size, spp, depth, n = 10, 16, 3, 8
+    ref, var_ref = _moments(scene, Path(max_depth=depth), range(50, 50 + n), 4 * spp, size)
+    ours, var = _moments(scene, BDPT(max_depth=depth), range(n), spp, size)
+    result = _z_test(ours, var, ref, var_ref, n * spp)
+    assert result.passed, result.message
+    np.testing.assert_allclose(ours.mean(axis=(0, 1)), ref.mean(axis=(0, 1)), rtol=0.02)
+    bad = _z_test(1.05 * ours, 1.05**2 * var, ref, var_ref, n * spp)
+    assert not bad.passed, bad.message
 
 
 # -- per-strategy images ---------------------------------------------------------------------

@@ -44,14 +44,27 @@ are reversed cumulative products over the vertex axis with masks.
 normalisation (`radiometria.render.render`, the `ptracer` module's "Normalisation": the film
 weight per slot is the filter's film integral $F_j$, pbrt-v4's $1/\mathrm{spp}$ splat scale).
 
-**Not handled:** participating media (a scene with media is refused: use `volpath`), lights at
-infinity and directional lights (refused with a `ValueError`: their vertices at infinity need
-solid-angle densities in the MIS weights; `ptracer` and `path` render them).
+**Lights at infinity** (`constant`, `envmap`) **and directional lights** follow pbrt-v4's
+convention for vertices at infinity. A light subpath from such a light starts on a disk of the
+scene's bounding-sphere radius $r$ across the emitted direction (`emission_at_infinity`); its
+$y_0$ stands for the light itself, with the density of the *direction* (solid angle, the
+light's pick probability included: pbrt's `InfiniteLightDensity`), and $y_1$ gets that of the
+ray's origin on the disk, $|\cos\theta_{y_1}| / \pi r^2$. A camera ray that leaves the scene
+ends the camera subpath on a vertex at infinity (strategy $s = 0$: the environment's
+radiance), whose forward density stays per solid angle and whose reverse densities are the
+light's direction density and, for the vertex before it, $|\cos| / \pi r^2$. Strategy
+$s = 1$ samples the light's direction from the camera end (`sample_li`, next-event
+estimation; the light is picked by the same variate as the light subpath's), since $y_0$ is
+no point to connect to; for the same reason strategy $(1, 1)$ does not exist for these lights
+and the MIS weights leave it out. A directional light is a delta light as well (no strategy
+$s = 0$).
+
+**Not handled:** participating media (a scene with media is refused: use `volpath`).
 
 The variates of a slot are `[BSDF u0, u1 | lobe, roulette]` for each camera-subpath
 scattering vertex ($z_1 \dots z_{D-1}$, $D$ = `max_depth`), then `[point u0, u1 | direction
-u0, u1 | light choice, side, -, -]` for the emission and 4 per light-subpath scattering vertex
-($y_1 \dots y_{D-2}$).
+u0, u1 | light choice, side | direction towards a light at infinity u0, u1]` for the emission
+and 4 per light-subpath scattering vertex ($y_1 \dots y_{D-2}$).
 
 !!! note "Thesis"
     Chapter 9 (bidirectional methods; title only in the text).
@@ -62,6 +75,7 @@ u0, u1 | light choice, side, -, -]` for the emission and 4 per light-subpath sca
     `GenerateLightSubpath`, `ConnectBDPT`, `MISWeight`); `Pharr2023` §5.4 (splats).
 """
 
+import math
 from typing import ClassVar
 
 import equinox as eqx
@@ -80,10 +94,6 @@ __all__ = ["BDPT", "HEURISTICS", "bdpt_mis_weight", "bdpt_sample_dimensions"]
 HEURISTICS = ("balance", "power")
 _EMISSION_DIMENSIONS = 8
 _DIMENSIONS_PER_VERTEX = 4
-
-
-# Lights whose MIS densities bdpt does not model yet (vertices at infinity).
-_LIGHTS_AT_INFINITY = frozenset({"directional", "constant", "envmap"})
 
 
 def bdpt_sample_dimensions(max_depth: int) -> int:
@@ -117,6 +127,7 @@ class _Vertices(eqx.Module):
     emit: Array  # (V, n, k) radiance emitted towards the previous vertex (camera side)
     emit_pos: Array  # area density of `sample_le` starting at the vertex (camera side)
     emit_dir: Array  # solid-angle density of `sample_le` emitting towards the previous vertex
+    at_inf: Array  # bool: a camera ray that left the scene (a vertex on a light at infinity)
 
 
 def _at(vertices: _Vertices, i) -> _Vertices:
@@ -139,6 +150,7 @@ def bdpt_mis_weight(
     s,
     *,
     heuristic: str = "power",
+    light_infinite: Bool[Array, " n"] | None = None,
 ) -> Float[Array, " n"]:
     r"""The MIS weight of strategy $(s, t)$ from the vertex densities (module docstring).
 
@@ -154,6 +166,9 @@ def bdpt_mis_weight(
     - `light_delta`: `(n,)` bool, $y_0$ is on a delta light (point, spot).
     - `s`: light vertices of the strategy, an int (may be traced), >= 0.
     - `heuristic`: `"balance"` ($\beta = 1$) or `"power"` ($\beta = 2$).
+    - `light_infinite`: `(n,)` bool, the path's light end is at infinity (a light at infinity
+        or a directional light), so the strategy $(1, 1)$ does not exist for it (the camera
+        cannot be joined to a point at infinity); `None`: no such light.
 
     **Returns:**
 
@@ -164,7 +179,7 @@ def bdpt_mis_weight(
     """
     power = heuristic == "power"
 
-    def sums(fwd, rev, count, prev_delta, delta, first):
+    def sums(fwd, rev, count, prev_delta, delta, first, skip=None):
         j = jnp.arange(fwd.shape[0], dtype=jnp.int32)[:, None]
         r = _remap0(rev) / _remap0(fwd)
         if power:
@@ -172,12 +187,20 @@ def bdpt_mis_weight(
         r = jnp.where(j < count, r, 1.0)
         rr = jnp.flip(jnp.cumprod(jnp.flip(r, 0), axis=0), 0)  # rr[i] = prod_{j >= i} r_j
         ok = (j >= first) & (j < count) & ~delta & ~prev_delta
+        if skip is not None:
+            ok = ok & ~skip
         return jnp.sum(jnp.where(ok, rr, 0.0), axis=0)
 
     prev_c = jnp.concatenate([jnp.zeros_like(delta_c[:1]), delta_c[:-1]], axis=0)
     prev_l = jnp.concatenate([light_delta[None], delta_l[:-1]], axis=0)
+    skip = None
+    if light_infinite is not None:  # the camera term j = 1 of a 2-vertex path is (1, 1)
+        j = jnp.arange(fwd_c.shape[0], dtype=jnp.int32)[:, None]
+        skip = (j == 1) & (s + t == 2) & light_infinite[None]
     total = (
-        1.0 + sums(fwd_c, rev_c, t, prev_c, delta_c, 1) + sums(fwd_l, rev_l, s, prev_l, delta_l, 0)
+        1.0
+        + sums(fwd_c, rev_c, t, prev_c, delta_c, 1, skip)
+        + sums(fwd_l, rev_l, s, prev_l, delta_l, 0)
     )
     return 1.0 / total
 
@@ -196,9 +219,9 @@ class BDPT(AbstractIntegrator):
         the one-segment paths).
     - `heuristic`: `"power"` (default, pbrt's) or `"balance"` (`Veach1997` eq. 10.9).
 
-    It needs a camera with `sample_wi` (the pinhole camera) and area, point or spot lights
-    (scenes with directional lights or lights at infinity raise `ValueError`, as do scenes
-    with participating media); it is rendered through
+    It needs a camera with `sample_wi` (the pinhole camera); every light kind works (area,
+    point, spot, directional, constant, envmap; module docstring), and scenes with
+    participating media raise `ValueError`. It is rendered through
     `radiometria.render.render`, which calls `radiance_and_splats`.
 
     !!! note "Thesis"
@@ -265,31 +288,51 @@ class BDPT(AbstractIntegrator):
 
     def _walk(self, scene, wl, variates, paths, start, n_steps, first_dim, mode):
         """Extend subpaths from `start = (o, d, beta, pdf_dir, alive, p_prev, ng_prev,
-        has_n_prev, beta_ref)` by `n_steps` vertices; the vertex of step `i` scatters (BSDF
-        sample with variates from `first_dim + 4 i`) unless it is the last.
+        has_n_prev, hero, inf_prev)` by `n_steps` vertices; the vertex of step `i` scatters
+        (BSDF sample with variates from `first_dim + 4 i`) unless it is the last.
+        `inf_prev` marks subpaths that start at infinity (a light at infinity or directional:
+        `pdf_dir` is then the origin's density on the disk, converted to area by the cosine
+        alone). A camera subpath (`mode = "radiance"`) whose ray leaves a scene with a light
+        at infinity ends on a vertex at infinity (`at_inf`; pbrt's convention: at the ray's
+        origin plus its direction, facing back).
         Returns the vertices `(n_steps, n, ...)` and each step's `pdf_rev` of the vertex
         before it `(n_steps, n)`."""
         dtype = wl.dtype
         n, k = wl.shape
         up = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3))
+        escapes = mode == "radiance" and _has_light_at_infinity(scene.light)
+        disk = _disk_density(scene.light)
 
         def step(state, i):
-            o, d, beta, pdf_dir, alive, p_prev, ng_prev, has_n_prev, hero = state
+            o, d, beta, pdf_dir, alive, p_prev, ng_prev, has_n_prev, hero, inf_prev = state
             v = _vertex(scene, o, d)
-            valid = alive & v.valid
+            hit = alive & v.valid
+            esc = alive & ~v.valid if escapes else jnp.zeros((n,), bool)
+            valid = hit | esc
             material = scene.face_material[v.face]
             two_sided = scene.materials.two_sided[material]
             transmissive = scene.materials.transmissive[material]
             front = v.cos_o > 0
             ns = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.ns, v.ns)
-            surf = valid & (front | two_sided | transmissive)
+            surf = hit & (front | two_sided | transmissive)
             wo = -d
-            to_prev = p_prev - v.p
+            p = jnp.where(esc[:, None], o + d, v.p)
+            ng = jnp.where(esc[:, None], wo, v.n)
+            ns = jnp.where(esc[:, None], wo, ns)
+            to_prev = p_prev - p
             d2 = jnp.maximum(dot(to_prev, to_prev), jnp.finfo(dtype).tiny)
-            conv_here = jnp.abs(v.cos_o) / d2
-            conv_prev = jnp.where(has_n_prev, jnp.abs(dot(ng_prev, wo)), 1.0) / d2
-            emit = scene.light.emitted(v.face, v.cos_o, valid, wl, v.uv)
+            # solid angle -> area here; from a disk at infinity the cosine alone; to a vertex
+            # at infinity none (its density stays per solid angle)
+            conv_here = jnp.abs(v.cos_o) / jnp.where(inf_prev, 1.0, d2)
+            conv_here = jnp.where(esc, 1.0, conv_here)
+            cos_prev = jnp.where(has_n_prev, jnp.abs(dot(ng_prev, wo)), 1.0)
+            conv_prev = jnp.where(inf_prev, 1.0, cos_prev / jnp.where(esc, 1.0, d2))
+            emit = scene.light.emitted(v.face, v.cos_o, hit, wl, v.uv)
             emit_pos, emit_dir = scene.light.pdf_le(v.face, v.cos_o)
+            if escapes:  # pbrt's PdfLightOrigin and PdfLight of a light at infinity
+                emit = emit + scene.light.emitted_escaped(d, esc, wl)
+                emit_pos = jnp.where(esc, scene.light.pdf_escaped(d), emit_pos)
+                emit_dir = jnp.where(esc, disk, emit_dir)
 
             s, t = coordinate_system(ns)
 
@@ -319,8 +362,8 @@ class BDPT(AbstractIntegrator):
                 go[:, None], new_beta / jnp.where(roulette & go, q, 1.0)[:, None], 0.0
             )
             vert = _Vertices(
-                p=v.p,
-                ng=v.n,
+                p=p,
+                ng=ng,
                 ns=ns,
                 wo=wo,
                 material=material,
@@ -332,18 +375,22 @@ class BDPT(AbstractIntegrator):
                 delta=valid & bs.is_delta,
                 valid=valid,
                 surf=surf,
-                has_n=valid,
+                has_n=hit,
                 hero=hero,
                 emit=emit,
                 emit_pos=emit_pos,
                 emit_dir=emit_dir,
+                at_inf=esc,
             )
             prev_rev = jnp.where(go, pdf_rev_dir * conv_prev, 0.0)
             hero = hero | (go & bs.terminate_secondary)
             o2 = jnp.where(go[:, None], _offset(v.p, v.n, wi, _scale(scene, v.p)), 0.0)
             d_next = jnp.where(go[:, None], wi, up)
             pdf_next = jnp.where(go & ~bs.is_delta, bs.pdf, 0.0)
-            new = (o2, d_next, new_beta, pdf_next, go, v.p, v.n, jnp.ones((n,), bool), hero)
+            new = (
+                o2, d_next, new_beta, pdf_next, go, v.p, v.n, jnp.ones((n,), bool), hero,
+                jnp.zeros((n,), bool),
+            )  # fmt: skip
             return new, (vert, prev_rev)
 
         _, (verts, prev_rev) = jax.lax.scan(step, start, jnp.arange(n_steps, dtype=jnp.int32))
@@ -381,6 +428,7 @@ class BDPT(AbstractIntegrator):
                 emit=jnp.zeros((n, k), dtype),
                 emit_pos=jnp.zeros((n,), dtype),
                 emit_dir=jnp.zeros((n,), dtype),
+                at_inf=falses,
             )
 
         # Camera subpath: z0 the pinhole, z1 .. zD by the camera ray and BSDF samples.
@@ -392,6 +440,7 @@ class BDPT(AbstractIntegrator):
             active,
             eye,
             zero3,
+            falses,
             falses,
             falses,
         )
@@ -408,27 +457,33 @@ class BDPT(AbstractIntegrator):
         cam_rev = jnp.concatenate([rev, jnp.zeros((1, n), dtype)], 0)  # step i gives z_i's
         cam = eqx.tree_at(lambda c: c.pdf_rev, cam, cam_rev)
 
-        # Light subpath: y0 on a light (sample_le), y1 .. y(D-1) by BSDF samples.
+        # Light subpath: y0 on a light (sample_le), y1 .. y(D-1) by BSDF samples. From a light
+        # at infinity (or a directional light) y0 stands for the light itself: its density is
+        # that of the direction (pbrt's InfiniteLightDensity, the pick included) and y1's that
+        # of the ray's origin on the disk, times the cosine at y1.
         first = _DIMENSIONS_PER_VERTEX * max(depth - 1, 0)
         ue = variates(first, _EMISSION_DIMENSIONS, paths).astype(dtype)
-        es = scene.light.sample_le(ue[:, 4], ue[:, 0:2], ue[:, 2:4], ue[:, 5], eye, wl)
+        es = scene.light.sample_le(ue[:, 4], ue[:, 0:2], ue[:, 2:4], ue[:, 5], eye, wl).complete()
         ok = active & (es.pdf_pos > 0) & (es.pdf_dir > 0)
+        inf = es.at_infinity & ok
         pdf_pos = jnp.where(ok, es.pdf_pos, 1.0)
-        has_n = ~es.delta_pos
+        has_n = ~es.delta_pos & ~inf
+        pdf_y0 = jnp.where(inf, scene.light.pdf_escaped(-es.d), es.pdf_pos)
         y0 = endpoint(
             es.p, es.n, jnp.where(ok[:, None], es.le / pdf_pos[:, None], 0.0),
-            jnp.where(ok, es.pdf_pos, 0.0), ok, has_n,
+            jnp.where(ok, pdf_y0, 0.0), ok, has_n,
         )  # fmt: skip
         y0 = eqx.tree_at(lambda y: y.delta, y0, falses)
         if depth >= 2:
-            cos_d = jnp.where(has_n, jnp.abs(dot(es.n, es.d)), 1.0)
+            cos_d = jnp.where(~es.delta_pos, jnp.abs(dot(es.n, es.d)), 1.0)
             beta = es.le * (cos_d / (pdf_pos * jnp.where(ok, es.pdf_dir, 1.0)))[:, None]
             o = jnp.where(has_n[:, None], _offset(es.p, es.n, es.d, _scale(scene, es.p)), es.p)
             up = jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3))
+            pdf_next = jnp.where(inf, es.pdf_disk, es.pdf_dir)
             start = (
                 jnp.where(ok[:, None], o, 0.0), jnp.where(ok[:, None], es.d, up),
-                jnp.where(ok[:, None], beta, 0.0), jnp.where(ok, es.pdf_dir, 0.0), ok,
-                es.p, es.n, has_n, falses,
+                jnp.where(ok[:, None], beta, 0.0), jnp.where(ok, pdf_next, 0.0), ok,
+                es.p, es.n, has_n, falses, inf,
             )  # fmt: skip
             # Step i is y_(i+1), whose variates follow the emission's.
             first_l = first + _EMISSION_DIMENSIONS
@@ -440,16 +495,18 @@ class BDPT(AbstractIntegrator):
             lv = eqx.tree_at(lambda c: c.pdf_rev, lv, light_rev)
         else:
             lv = jax.tree.map(lambda a: a[None], y0)
-        return cam, lv, ue, es.delta_pos & ok
+        return cam, lv, ue, (es.delta_pos | es.delta_dir) & ok, inf
 
     # -- connections ----------------------------------------------------------------------
 
-    def _strategy(self, scene, camera, cam, lv, ue, light_delta, wl, s, t):
+    def _strategy(self, scene, camera, cam, lv, ue, light, wl, s, t):
         """Strategy `(s, t)` (traced ints) for every slot: `(value (n, k), raster (n, 2),
         valid (n,), weight (n,))`; `value` is unweighted (camera radiance for `t >= 2`, the
-        splat for `t = 1`)."""
+        splat for `t = 1`). `light = (light_delta, light_inf)`: the slot's light is a delta
+        light / at infinity (`_subpaths`)."""
         dtype = wl.dtype
         tiny = jnp.finfo(dtype).tiny
+        light_delta, light_inf = light
         pt = _at(cam, t - 1)
         qs = _at(lv, jnp.maximum(s - 1, 0))
         cam_end = t == 1
@@ -459,6 +516,15 @@ class BDPT(AbstractIntegrator):
         d2 = jnp.maximum(dot(d, d), tiny)
         dist = jnp.sqrt(d2)
         w = d / dist[:, None]  # from the camera end towards the light end
+        at_infinity = _has_light_at_infinity(scene.light)
+        if at_infinity:
+            # s = 1 with a light at infinity (or a directional light): y0 stands for the light,
+            # not a point, so the camera end samples a direction towards it (next-event
+            # estimation, the light picked by the same variate as the light subpath's).
+            inf1 = s1 & light_inf
+            ls = scene.light.sample_li(pt.p, ue[:, 4], ue[:, 6:8], wl)
+            w = jnp.where(inf1[:, None], ls.wi, w)
+            d2 = jnp.where(inf1, 1.0, d2)
         cs = camera.sample_wi(qs.p)
         w_q = jnp.where(cam_end, cs.wi, -w)  # from the light end towards the camera end
 
@@ -473,6 +539,10 @@ class BDPT(AbstractIntegrator):
         val_surf = qs.beta * fq * corr[:, None]
         val_l = jnp.where(s1, val_emit, val_surf)
         ok_l = qs.valid & (s1 | qs.surf)
+        if at_infinity:
+            val_inf = ls.radiance / jnp.where(ls.pdf > 0, ls.pdf, 1.0)[:, None]
+            val_l = jnp.where(inf1[:, None], val_inf, val_l)
+            ok_l = ok_l & (~inf1 | (ls.pdf > 0))
 
         # The camera end: the pinhole (t = 1) or a surface vertex's BSDF.
         fp, pp_fwd, pp_rev = _bsdf_eval(scene, pt, w, wl, "radiance")
@@ -490,13 +560,19 @@ class BDPT(AbstractIntegrator):
         ab = b - a
         ab_len = jnp.sqrt(jnp.maximum(dot(ab, ab), tiny))
         seg_ok = (~s0) & ok_l & jnp.where(cam_end, cs.valid, pt.surf)
-        tmax = jnp.where(seg_ok, ab_len * (1.0 - 1e-4), 0.0)
-        visible = ~scene.accelerator.intersect_any(a, ab / ab_len[:, None], tmax)
+        tmax = ab_len * (1.0 - 1e-4)
+        direction = ab / ab_len[:, None]
+        if at_infinity:  # an unbounded shadow ray towards the light at infinity
+            tmax = jnp.where(inf1, jnp.inf, tmax)
+            direction = jnp.where(inf1[:, None], w, direction)
+        tmax = jnp.where(seg_ok, tmax, 0.0)
+        visible = ~scene.accelerator.intersect_any(a, direction, tmax)
         valid = jnp.where(s0, pt.valid & (t >= 2), seg_ok & visible)
         if self.hide_emitters:
             valid = valid & (s + t > 2)
-        # A delta light is never seen directly (as with `path` and `ptracer`).
-        valid = valid & ~(s1 & cam_end & light_delta)
+        # A delta light is never seen directly (as with `path` and `ptracer`), nor is a light at
+        # infinity by a connection to the camera (strategy (1, 1): its y0 is no point).
+        valid = valid & ~(s1 & cam_end & (light_delta | light_inf))
 
         # MIS: the densities the connection changes (pbrt's ConnectBDPT / MISWeight).
         conv_pt = jnp.abs(dot(pt.ng, w)) / d2
@@ -510,6 +586,15 @@ class BDPT(AbstractIntegrator):
             pp_fwd * conv_qs / d2,
         )
         rev_qsm = pq_rev * qs.conv_prev
+        fwd_l = lv.pdf_fwd
+        if at_infinity:
+            # the light at infinity generates pt from the disk (pbrt's PdfLight: the cosine
+            # alone), the camera end samples its direction per solid angle (no conversion),
+            # and y0's density is that of the direction next-event estimation sampled
+            rev_pt = jnp.where(inf1, _disk_density(scene.light) * jnp.abs(dot(pt.ng, w)), rev_pt)
+            rev_qs = jnp.where(inf1, pp_fwd, rev_qs)
+            fwd_y0 = jnp.where(inf1, scene.light.pdf_escaped(ls.wi), fwd_l[0])
+            fwd_l = fwd_l.at[0].set(fwd_y0)
 
         jc = jnp.arange(cam.pdf_rev.shape[0], dtype=jnp.int32)[:, None]
         rev_c = jnp.where(jc == t - 1, rev_pt[None], cam.pdf_rev)
@@ -520,8 +605,8 @@ class BDPT(AbstractIntegrator):
         rev_l = jnp.where(jl == s - 2, rev_qsm[None], rev_l)
         delta_l = lv.delta & (jl != s - 1)
         weight = bdpt_mis_weight(
-            cam.pdf_fwd, rev_c, delta_c, t, lv.pdf_fwd, rev_l, delta_l, light_delta, s,
-            heuristic=self.heuristic,
+            cam.pdf_fwd, rev_c, delta_c, t, fwd_l, rev_l, delta_l, light_delta, s,
+            heuristic=self.heuristic, light_infinite=jnp.where(s0, pt.at_inf, light_inf),
         )  # fmt: skip
 
         # Dispersion: a path that kept only its hero wavelength counts it alone (x k).
@@ -560,23 +645,17 @@ class BDPT(AbstractIntegrator):
                 "bdpt does not handle participating media (the scene has media); render it "
                 "with the 'volpath' integrator."
             )
-        lights = getattr(scene.light, "lights", (scene.light,))
-        at_infinity = [lt.NAME for lt in lights if lt.NAME in _LIGHTS_AT_INFINITY]
-        if at_infinity:
-            raise ValueError(
-                f"bdpt does not handle the {at_infinity[0]!r} light yet (lights at infinity "
-                "and directional lights); render the scene with 'path' or 'ptracer'."
-            )
-        cam, lv, ue, light_delta = self._subpaths(
+        cam, lv, ue, light_delta, light_inf = self._subpaths(
             scene, camera, origins, directions, wavelength_nm, variates, active
         )
+        light = (light_delta, light_inf)
         if self.select is not None:
-            return self._selected(scene, camera, cam, lv, ue, light_delta, wavelength_nm)
+            return self._selected(scene, camera, cam, lv, ue, light, wavelength_nm)
         pairs_c, pairs_l = self.strategies()
 
         def one(carry, st):
             value, _, _, weight = self._strategy(
-                scene, camera, cam, lv, ue, light_delta, wavelength_nm, st[0], st[1]
+                scene, camera, cam, lv, ue, light, wavelength_nm, st[0], st[1]
             )
             return carry + value * weight[:, None], None
 
@@ -586,28 +665,42 @@ class BDPT(AbstractIntegrator):
 
         def one_splat(_, st):
             value, raster, valid, weight = self._strategy(
-                scene, camera, cam, lv, ue, light_delta, wavelength_nm, st[0], st[1]
+                scene, camera, cam, lv, ue, light, wavelength_nm, st[0], st[1]
             )
             return None, Splats(raster, value * weight[:, None], valid)
 
         _, splats = jax.lax.scan(one_splat, None, jnp.asarray(pairs_l, jnp.int32))
         return radiance, splats
 
-    def _selected(self, scene, camera, cam, lv, ue, light_delta, wl):
+    def _selected(self, scene, camera, cam, lv, ue, light, wl):
         """One strategy `self.select = [s, t, weighted]` alone: its estimate (MIS-weighted, or
         with weight 1 where it is valid) as the camera-ray radiance (`t >= 2`) or as one row
         of splats (`t = 1`); the other part is zero. The strategy is traced, so one compiled
         step serves every strategy."""
         s, t, weighted = self.select[0], self.select[1], self.select[2]
-        value, raster, valid, weight = self._strategy(
-            scene, camera, cam, lv, ue, light_delta, wl, s, t
-        )
+        value, raster, valid, weight = self._strategy(scene, camera, cam, lv, ue, light, wl, s, t)
         w = jnp.where(weighted != 0, weight, valid.astype(value.dtype))
         contrib = value * w[:, None]
         splat = t == 1
         radiance = jnp.where(splat, 0.0, contrib)
         splats = Splats(raster[None], jnp.where(splat, contrib, 0.0)[None], (valid & splat)[None])
         return radiance, splats
+
+
+def _lights(light) -> tuple:
+    return tuple(getattr(light, "lights", (light,)))
+
+
+def _has_light_at_infinity(light) -> bool:
+    """Whether any of the scene's lights is at infinity or directional (static)."""
+    return any(getattr(lt, "bound_radius", None) is not None for lt in _lights(light))
+
+
+def _disk_density(light) -> float:
+    """$1 / \\pi r^2$, the density per unit area of an emitted ray's origin on the disk across
+    a light at infinity (`emission_at_infinity`), or 0 in a scene without one (static)."""
+    radii = [float(lt.bound_radius) for lt in _lights(light) if getattr(lt, "bound_radius", 0)]
+    return 1.0 / (math.pi * radii[0] ** 2) if radii else 0.0
 
 
 def _scale(scene, p):

@@ -46,7 +46,7 @@ The driver's independent steps cannot express a Markov chain (each step's variat
 function of (seed, pixel, sample) and nothing carries from one step to the next), so `render`
 hands the whole render to `PSSMLT.render_chains`.
 
-**Not handled:** what `BDPT` does not (participating media, lights at infinity).
+**Not handled:** what `BDPT` does not (participating media).
 
 !!! note "Thesis"
     Chapter 9 (bidirectional methods; title only in the text).

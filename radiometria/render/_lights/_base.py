@@ -65,6 +65,15 @@ class EmissionSample(eqx.Module):
     - `pdf_dir_observer`: the solid-angle density with which `sample_le` would have emitted
         the direction from `p` towards `observer` `(n,)` (0 outside the emission; for
         bidirectional path tracing's MIS weights). [sr^-1]
+    - `at_infinity`: `(n,)` bool: the light is at infinity or directional, so `p` is the
+        ray's origin on a disk across `d` (`emission_at_infinity`), not a point on the light.
+    - `delta_dir`: `(n,)` bool: `d` is a delta direction (a directional light), so no path
+        can reach the light by chance.
+    - `pdf_disk`: `(n,)` density per unit area of the origin on that disk, without the
+        light's pick probability ($1/\pi r^2$; 0 for lights not at infinity). [m^-2]
+
+    The last three are `None` for lights that never set them (read as False / 0; `complete`
+    fills them in).
 
     The light path's initial throughput is `le |n . d| / (pdf_pos pdf_dir)` (no cosine for
     `delta_pos`), and 0 marks a failed sample (`pdf_pos = 0`).
@@ -82,6 +91,30 @@ class EmissionSample(eqx.Module):
     le_observer: Float[Array, "n k"]
     delta_pos: Bool[Array, " n"]
     pdf_dir_observer: Float[Array, " n"] | None = None
+    at_infinity: Bool[Array, " n"] | None = None
+    delta_dir: Bool[Array, " n"] | None = None
+    pdf_disk: Float[Array, " n"] | None = None
+
+    def complete(self) -> "EmissionSample":
+        """The same sample with every optional field present: zero densities and False
+        flags where the light left them `None` (so samples of several lights can be merged)."""
+        zero = jnp.zeros(self.pdf_pos.shape, self.pdf_pos.dtype)
+        false = jnp.zeros(self.pdf_pos.shape, bool)
+
+        def fill(x, default):
+            return default if x is None else x
+
+        return eqx.tree_at(
+            lambda e: (e.pdf_dir_observer, e.at_infinity, e.delta_dir, e.pdf_disk),
+            self,
+            (
+                fill(self.pdf_dir_observer, zero),
+                fill(self.at_infinity, false),
+                fill(self.delta_dir, false),
+                fill(self.pdf_disk, zero),
+            ),
+            is_leaf=lambda x: x is None,
+        )
 
 
 class AbstractLight(eqx.Module):
@@ -170,11 +203,13 @@ class AbstractLight(eqx.Module):
     ) -> EmissionSample:
         """Sample an emitted ray (light tracing): a light by power (`u_select`), a point on it
         (`u_pos`), a direction (`u_dir`; `u_side` picks the side of a two-sided emitter), and
-        the emission towards the points `observer` [scene units] as well. Lights that cannot
-        start light paths yet (directional, constant, envmap) raise `ValueError`."""
+        the emission towards the points `observer` [scene units] as well. Every built-in
+        light implements it; a plugin that does not raises `ValueError` here, so light
+        tracing, `bdpt` and `pssmlt` refuse it by name."""
         raise ValueError(
             f"the {getattr(self, 'NAME', type(self).__name__)!r} light cannot start light "
-            "paths yet (light tracing supports the 'area', 'point' and 'spot' emitters)."
+            "paths: its plugin does not implement `sample_le` (light tracing, bdpt and pssmlt "
+            "need it)."
         )
 
     def pdf_le(
@@ -205,6 +240,8 @@ def emission_at_infinity(
     le: Float[Array, "n k"],
     pdf_dir: Float[Array, " n"],
     pick_prob: Float[Array, " n"],
+    *,
+    delta_dir: bool = False,
 ) -> EmissionSample:
     r"""An emitted ray of a light at infinity (or a directional light) travelling along the
     unit directions `d`: its origin uniform on the disk of radius `radius` [scene units]
@@ -212,9 +249,10 @@ def emission_at_infinity(
     crosses the whole scene (pbrt-v4's `SampleLe` of distant and infinite lights).
 
     `pdf_pos` is $P / (\pi r^2)$ [m^-2] with `pick_prob` $P$, `pdf_dir` the given solid-angle
-    density of `d` [sr^-1] (1 for a delta direction), and `n = d` (the disk's normal, so the
-    throughput $L_e |n \cdot d| / (p_A p_\omega)$ has no cosine). The camera never sees the
-    disk, so `le_observer` and `pdf_dir_observer` are 0.
+    density of `d` [sr^-1] (1 for a delta direction, `delta_dir` True: a directional light),
+    and `n = d` (the disk's normal, so the throughput $L_e |n \cdot d| / (p_A p_\omega)$ has
+    no cosine). The camera never sees the disk, so `le_observer` and `pdf_dir_observer` are
+    0; `at_infinity` is True and `pdf_disk` is $1 / \pi r^2$.
 
     ??? cite "References"
         `Pharr2023` §12.4 (distant lights), §12.5 (infinite lights' `SampleLe`).
@@ -235,4 +273,7 @@ def emission_at_infinity(
         le_observer=jnp.zeros_like(le),
         delta_pos=jnp.zeros((n,), bool),
         pdf_dir_observer=zero,
+        at_infinity=jnp.ones((n,), bool),
+        delta_dir=jnp.full((n,), delta_dir, bool),
+        pdf_disk=jnp.full((n,), 1.0 / (jnp.pi * radius * radius), dtype),
     )

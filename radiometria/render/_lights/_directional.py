@@ -104,7 +104,9 @@ class DirectionalLight(AbstractDeltaLight):
         d = self.direction[j].astype(observer.dtype)
         le = self.irradiance(j, wavelength_nm)
         one = jnp.ones(prob.shape, observer.dtype)
-        return emission_at_infinity(d, u_pos, self.bound_center, self.bound_radius, le, one, prob)
+        return emission_at_infinity(
+            d, u_pos, self.bound_center, self.bound_radius, le, one, prob, delta_dir=True
+        )
 
     def power(self, scene_radius: float) -> float:
         return float(np.pi * scene_radius**2 * self.mean_irradiance)

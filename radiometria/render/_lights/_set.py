@@ -140,6 +140,7 @@ class LightSet(AbstractLight):
         out = None
         for i, light in enumerate(self.lights):
             s = light.sample_le(u_light, u_pos, u_dir, u_side, observer, wavelength_nm)
+            s = s.complete()
             if out is None:
                 out = s
                 continue
