@@ -23,6 +23,7 @@ from ._lights import (
     DirectionalLight,
     EnvironmentLight,
     PointLight,
+    ProjectorLight,
     SpotLight,
 )
 from ._materials import (
@@ -74,7 +75,13 @@ MATERIALS = _by_name(
 )  # fmt: skip
 # Mitsuba 3's `<emitter type=...>` names.
 LIGHTS = _by_name(
-    AreaLight, PointLight, SpotLight, DirectionalLight, ConstantLight, EnvironmentLight
+    AreaLight,
+    PointLight,
+    SpotLight,
+    DirectionalLight,
+    ConstantLight,
+    EnvironmentLight,
+    ProjectorLight,
 )
 # Mitsuba 3's `<integrator type=...>` names; `radiometria render --integrator`.
 INTEGRATORS = _by_name(Path, Direct, VolPath, VolPathMIS, PTracer, BDPT, PSSMLT)

@@ -37,7 +37,7 @@ class RenderScene(eqx.Module):
     - `face_material`: `(f,)` int32 material of each triangle.
     - `materials`: the `MaterialSet` (one plugin per kind of material).
     - `light`: the emitters, an `AbstractLight`: an `AreaLight` on emissive triangles, or a
-        `LightSet` of it and further plugins (point, spot, directional, environment).
+        `LightSet` of it and further plugins (point, spot, projector, directional, environment).
     - `accelerator`: an `AbstractAccelerator` (brute force or a BVH).
     - `ray_epsilon`: relative offset of secondary ray origins (static). [1]
     - `media`: the scene's participating media (`MediumSet`), or `None` for none.

@@ -428,7 +428,13 @@ def test_bdpt_lights_at_infinity_closed_form(tmp_path, kind):
     # are skewed and a variance from a handful of renders is unreliable), the image's mean is
     # within 1 %, and a closed form 10 % brighter fails the same z-test.
     path, value = _bidirectional_scene(tmp_path, kind, "bdpt")
-    spp, seeds = 8, range(16)
+    _seeds_z_test(path, np.full((SIZE, SIZE), value))
+
+
+def _seeds_z_test(path, expected, spp=8, seeds=range(16)):
+    """Each pixel's Y, the mean of independent renders, against `expected` `(SIZE, SIZE)` by
+    the z-test with the variance measured across the renders; the image's mean within 1 %;
+    a reference 10 % brighter fails the same z-test."""
     images = np.stack([_render(path, spp, seed=s)[..., 1] for s in seeds])
     mean, var = images.mean(0), images.var(0, ddof=1) / len(seeds)
     total = spp * len(seeds)
@@ -437,10 +443,9 @@ def test_bdpt_lights_at_infinity_closed_form(tmp_path, kind):
         return pixel_z_test(mean, reference, var * total, total, None, variance_floor=1e-10,
                             required_fraction=0.99)  # fmt: skip
 
-    expected = np.full(mean.shape, value)
     result = z_test(expected)
     assert result.passed, result.message
-    assert abs(mean.mean() / value - 1) < 0.01, (mean.mean(), value)
+    assert abs(mean.mean() / expected.mean() - 1) < 0.01, (mean.mean(), expected.mean())
     assert not z_test(1.1 * expected).passed
 
 
@@ -458,3 +463,57 @@ def test_pssmlt_directional_light_closed_form(tmp_path):
         variance_floor=1e-10, required_fraction=0.9,
     )  # fmt: skip
     assert result.passed, result.message
+
+
+# Projectors (Mitsuba's `projector`): a constant image cast squarely onto the plane from height
+# h has irradiance pi s E / h^2 on its footprint (|x|, |y| < h tan(fov/2)) and none outside.
+_PROJ_H, _PROJ_FOV, _PROJ_SCALE = 2.0, 40.0, 1.5
+
+
+def _projector_xml(extra: str = "", fov: float = _PROJ_FOV) -> str:
+    return (
+        f'<emitter type="projector"><float name="fov" value="{fov}"/>'
+        f'<float name="scale" value="{_PROJ_SCALE}"/>'
+        '<transform name="to_world"><lookat origin="0, 0, '
+        f'{_PROJ_H}" target="0, 0, 0" up="0, 1, 0"/></transform>{extra}</emitter>'
+    )
+
+
+@pytest.mark.parametrize("integrator", ["direct", "ptracer", "bdpt"])
+def test_projector_closed_form(tmp_path, integrator):
+    # Next-event estimation (direct), light paths from the image (ptracer) and both with MIS
+    # (bdpt) against L = rho s E / h^2 on the footprint (E = 1: white light of Y = 1), 0
+    # outside.
+    half = _PROJ_H * np.tan(np.radians(_PROJ_FOV) / 2)
+    text = _scene(_projector_xml(), integrator=integrator).replace(
+        '<integrator type="bdpt"/>',
+        '<integrator type="bdpt"><integer name="max_depth" value="2"/></integrator>',
+    )
+    path = _write(tmp_path, text)
+    mean, _ = _pixel_means(
+        lambda x, y: np.where(
+            (np.abs(x) < half) & (np.abs(y) < half), RHO * _PROJ_SCALE / _PROJ_H**2, 0.0
+        ),
+        n_sub=96,  # the footprint's edges cut pixels: a fine quadrature of their coverage
+    )
+    _seeds_z_test(path, mean)
+
+
+def test_projector_bad_parameters(tmp_path):
+    for extra, match in (
+        ('<float name="fov" value="190"/>', r"fov.*\(0, 180\).*190"),
+        ('<float name="scale" value="-1"/>', r"scale.*>= 0.*-1"),
+        ('<string name="fov_axis" value="z"/>', r"fov_axis.*'z'"),
+    ):
+        text = _scene(
+            '<emitter type="projector"><transform name="to_world"><translate z="2"/>'
+            f"</transform>{extra}</emitter>"
+        )
+        with pytest.raises(SceneError, match=rf"scene\.xml:\d+: .*projector.*{match}"):
+            rr.load_scene(_write(tmp_path, text))
+    text = _scene(
+        '<emitter type="projector"><transform name="to_world"><scale value="2"/>'
+        "</transform></emitter>"
+    )
+    with pytest.raises(SceneError, match=r"rotation and a translation"):
+        rr.load_scene(_write(tmp_path, text))

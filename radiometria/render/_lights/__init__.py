@@ -17,5 +17,6 @@ from ._constant import ConstantLight as ConstantLight
 from ._directional import DirectionalLight as DirectionalLight
 from ._envmap import EnvironmentLight as EnvironmentLight, read_envmap as read_envmap
 from ._point import PointLight as PointLight
+from ._projector import ProjectorLight as ProjectorLight
 from ._set import LightSet as LightSet
 from ._spot import SpotLight as SpotLight, spot_falloff as spot_falloff

@@ -35,12 +35,13 @@ and rejects everything else with an error that names the file, the line and the 
   `"l1:v1, l2:v2, ..."` in nm) or blackbody (`<spectrum type="blackbody">` with
   `temperature` and optional `scale`, or Mitsuba 0.6's `<blackbody temperature=...>`).
   Outside shapes: `point`, `spot` (with a bitmap `texture` projected over its cone, as
-  Mitsuba), `directional`, `constant`, `envmap`.
+  Mitsuba), `directional`, `constant`, `envmap`, `projector` (`irradiance` a spectrum, bitmap
+  or checkerboard, `scale`, `fov`/`fov_axis` or `focal_length`, a rigid `to_world`).
 - Textures (`_textures_xml.TEXTURED_PARAMETERS`): `diffuse` `reflectance`; `plastic` and
   `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
   `roughconductor` `specular_reflectance`; `roughconductor` and `roughdielectric` `alpha`,
   `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`; `normalmap`, `bumpmap`;
-  `spot` `texture`; `principled` and `principledthin` `base_color` and every scalar Mitsuba
+  `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color` and every scalar Mitsuba
   reads as a texture (`roughness`, `metallic`, `spec_trans`, `diff_trans`, ...; a thin
   sheet's `eta` too, not the principled `eta` or `specular`).
   Scalar parameters (roughness, weight, opacity) use the texels'
@@ -671,6 +672,7 @@ _DEFAULT_EMISSION = {
     "point": "intensity",
     "spot": "intensity",
     "directional": "irradiance",
+    "projector": "irradiance",
 }
 
 

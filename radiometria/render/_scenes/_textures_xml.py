@@ -27,7 +27,7 @@ __all__ = ["TEXTURED_PARAMETERS", "texture_property", "texture_ref_properties", 
 TEXTURED_PARAMETERS = frozenset(
     {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity"),
      ("normalmap", "normalmap"), ("bumpmap", "texture"), ("spot", "texture"),
-     ("area", "radiance"),
+     ("area", "radiance"), ("projector", "irradiance"),
      ("conductor", "specular_reflectance")}
     | {("roughconductor", n) for n in ("specular_reflectance", "alpha", "alpha_u", "alpha_v")}
     | {("roughdielectric", n) for n in ("alpha", "alpha_u", "alpha_v")}
