@@ -56,16 +56,25 @@ def mitsuba_moments(path, spp: int, seed: int = 0) -> tuple[np.ndarray, np.ndarr
 
 
 def z_test_against_mitsuba(
-    path, *, spp: int, ref_spp: int, seed: int = 0, ref_seed: int = 1, **render_kwargs
+    path,
+    *,
+    spp: int,
+    ref_spp: int,
+    seed: int = 0,
+    ref_seed: int = 1,
+    ours_path=None,
+    **render_kwargs,
 ):
     """Render `path` with radiometria (XYZ, independent samples by default) and with Mitsuba
-    (`mitsuba_moments`), and return `pixel_z_test(ours, mean, variance, spp, ref_spp)`."""
+    (`mitsuba_moments`), and return `pixel_z_test(ours, mean, variance, spp, ref_spp)`.
+    `ours_path`: render that scene instead against `path`'s reference (negative controls)."""
     from radiometria.montecarlo import pixel_z_test
     from radiometria.render import render
 
     mean, var = mitsuba_moments(path, ref_spp, seed=ref_seed)
     render_kwargs.setdefault("progress", False)
-    ours = np.asarray(render(path, spp=spp, seed=seed, return_xyz=True, **render_kwargs))
+    ours_path = path if ours_path is None else ours_path
+    ours = np.asarray(render(ours_path, spp=spp, seed=seed, return_xyz=True, **render_kwargs))
     return pixel_z_test(ours.astype(np.float64), mean, var, spp, ref_spp)
 
 
@@ -176,3 +185,24 @@ def cornell_box_materials_xml(width: int, height: int, spp: int = 64) -> str:
             out.append(extra.rstrip("\n"))
         out.append(line)
     return "\n".join(out) + "\n"
+
+
+def projected_image_scene(path, emitter: str, integrator: str = "direct"):
+    """Write to `path` a 16 x 16 scene (box filter) of a grey diffuse wall at z = 1 seen from
+    the origin, lit by `emitter` (an `<emitter>` element: a spot or projector casting an
+    image), and return `path`."""
+    path.write_text(f"""<scene version="3.0.0">
+  {integrator}
+  <sensor type="perspective"><float name="fov" value="50"/>
+    <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/>
+    </transform>
+    {film_xml(16, 16, "box")}
+  </sensor>
+  {emitter}
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="3"/><rotate y="1" angle="180"/>
+      <translate z="1"/></transform>
+    <bsdf type="diffuse"><spectrum name="reflectance" value="0.8"/></bsdf>
+  </shape>
+</scene>""")
+    return path

@@ -15,7 +15,7 @@ from radiometria.render import SceneError, load_scene
 from radiometria.render._lights._spot import SpotLight
 from radiometria.render._textures import TextureSpec, read_texture_image
 
-from ._mitsuba import film_xml
+from ._mitsuba import projected_image_scene
 
 mi = pytest.importorskip("mitsuba")
 dr = pytest.importorskip("drjit")
@@ -74,27 +74,15 @@ def test_textured_spot_intensity_matches_mitsubas_spot(tmp_path):
 
 def _scene(tmp_path, image="colour.png"):
     _images(tmp_path)
-    path = tmp_path / f"spot_{image}.xml"
-    path.write_text(f"""<scene version="3.0.0">
-  <integrator type="direct"/>
-  <sensor type="perspective"><float name="fov" value="50"/>
-    <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/>
-    </transform>
-    {film_xml(16, 16, "box")}
-  </sensor>
-  <emitter type="spot"><spectrum name="intensity" value="4"/>
+    spot = f"""<emitter type="spot"><spectrum name="intensity" value="4"/>
     <texture name="texture" type="bitmap"><string name="filename" value="{image}"/></texture>
     <float name="cutoff_angle" value="20"/><float name="beam_width" value="15"/>
     <transform name="to_world"><lookat origin="0, 0, 0" target="0.05, 0, 1" up="0, 1, 0"/>
     </transform>
-  </emitter>
-  <shape type="rectangle">
-    <transform name="to_world"><scale value="3"/><rotate y="1" angle="180"/>
-      <translate z="1"/></transform>
-    <bsdf type="diffuse"><spectrum name="reflectance" value="0.8"/></bsdf>
-  </shape>
-</scene>""")
-    return path
+  </emitter>"""
+    return projected_image_scene(
+        tmp_path / f"spot_{image}.xml", spot, '<integrator type="direct"/>'
+    )
 
 
 @pytest.mark.slow
@@ -107,14 +95,10 @@ def test_textured_spot_scene_passes_the_z_test_against_mitsuba(tmp_path):
 
 @pytest.mark.slow
 def test_a_mirrored_spot_texture_fails_the_z_test(tmp_path):
-    from radiometria.montecarlo import pixel_z_test
-    from radiometria.render import render
+    from ._mitsuba import z_test_against_mitsuba
 
-    from ._mitsuba import mitsuba_moments
-
-    mean, var = mitsuba_moments(_scene(tmp_path), 1024, seed=1)
-    ours = render(_scene(tmp_path, "mirrored.png"), spp=64, return_xyz=True, progress=False)
-    res = pixel_z_test(np.asarray(ours, np.float64), mean, var, 64, 1024)
+    mirrored = _scene(tmp_path, "mirrored.png")
+    res = z_test_against_mitsuba(_scene(tmp_path), spp=64, ref_spp=1024, ours_path=mirrored)
     assert not res.passed, res.message
 
 
