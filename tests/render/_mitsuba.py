@@ -206,3 +206,30 @@ def projected_image_scene(path, emitter: str, integrator: str = "direct"):
   </shape>
 </scene>""")
     return path
+
+
+def delta_light_values(emitter, ours, n: int = 96, seed: int = 1):
+    """Mitsuba's `emitter.sample_direction` (scalar_spectral; intensity / distance^2 of a delta
+    light) and our light's `sample_li` `radiance` towards `n` random points on the plane
+    z = 3 (x in [-1.5, 2.5], y in [-1, 2]), at 430, 510, 570 and 640 nm: `(mitsuba, ours)`,
+    each `(n, 4)`."""
+    import drjit as dr
+    import jax.numpy as jnp
+    import mitsuba as mi
+
+    rng = np.random.default_rng(seed)
+    pts = np.column_stack([rng.uniform(-1.5, 2.5, n), rng.uniform(-1.0, 2.0, n),
+                           np.full(n, 3.0)])  # fmt: skip
+    wl = np.array([430.0, 510.0, 570.0, 640.0])
+    expected = []
+    for p in pts:
+        it = dr.zeros(mi.Interaction3f)
+        it.p = mi.Point3f(*map(float, p))
+        it.wavelengths = mi.Spectrum(wl)
+        _, spec = emitter.sample_direction(it, mi.Point2f(0, 0))
+        expected.append(np.array(spec, np.float64))
+    ls = ours.sample_li(
+        jnp.asarray(pts, jnp.float32), jnp.zeros(n, jnp.float32), jnp.zeros((n, 2), jnp.float32),
+        jnp.asarray(np.tile(wl, (n, 1)), jnp.float32),
+    )  # fmt: skip
+    return np.asarray(expected), np.asarray(ls.radiance, np.float64)
