@@ -75,12 +75,18 @@ from ..._bits import pcg4d, uint32_to_unit_float
 from ..._math import dot
 from ...media import HomogeneousMedium
 from ...montecarlo import power_heuristic
-from ...scattering import coordinate_system
 from .._materials._null import has_null, is_null
 from .._media import KEEP_MEDIUM, MediumSet
 from .._render_scene import RenderScene
 from ._base import AbstractIntegrator, check_path_fields, scene_flag, scene_max_depth
-from ._path import DIMENSIONS_PER_BOUNCE, _default_chunk, _offset, _vertex
+from ._path import (
+    DIMENSIONS_PER_BOUNCE,
+    _default_chunk,
+    _offset,
+    _Vertex,
+    _vertex,
+    shading_frame,
+)
 from ._segments import run_segments
 
 __all__ = [
@@ -362,26 +368,21 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     face = walk.face
     ng = scene.normal[face]
     material = scene.face_material[face]
-    two_sided = scene.materials.two_sided[material]
-    transmissive = scene.materials.transmissive[material]
     # The BSDF frame is the shading normal (as in `path_radiance`: Mitsuba's smoothed vertex
     # normals, also for meshes whose file has none); which side was hit, offsets and medium
     # changes follow the geometric normal `ng`.
-    front = walk.cos_o > 0
-    ns = jnp.where(walk.event[:, None], ng, walk.ns)  # medium vertices: any frame
-    n = jnp.where((two_sided & ~front & ~transmissive)[:, None], -ns, ns)
-    alive = state.alive & (walk.event | (walk.surface & (front | two_sided | transmissive)))
-    s, t = coordinate_system(n)
-
-    def to_local(w):
-        return jnp.stack([dot(w, s), dot(w, t), dot(w, n)], axis=-1)
-
-    def to_world(w):
-        return w[:, 0:1] * s + w[:, 1:2] * t + w[:, 2:3] * n
+    # Medium vertices take any frame (the phase function ignores it); surfaces get `path`'s
+    # shading frame, with the differential geometry normal and bump maps need.
+    ns = jnp.where(walk.event[:, None], ng, walk.ns)
+    hit = _Vertex(valid=walk.surface, p=walk.p, n=ng, face=face, t=jnp.zeros_like(walk.cos_o),
+                  cos_o=walk.cos_o, uv=walk.uv, ns=ns)  # fmt: skip
+    frame = shading_frame(scene, hit)
+    alive = state.alive & (walk.event | (walk.surface & frame.scatters))
+    to_local, to_world = frame.to_local, frame.to_world
 
     p = walk.p
     wo_l = to_local(wo)
-    bsdf = scene.materials.bxdf(material, wavelength_nm, walk.uv)
+    bsdf = scene.materials.bxdf(material, wavelength_nm, walk.uv, frame.geometry)
     offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(p), axis=-1))
     media = scene.media
 

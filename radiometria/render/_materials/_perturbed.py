@@ -188,7 +188,7 @@ class _Adapter(AbstractMaterial):
         if geometry is None:
             raise ValueError(
                 f"the {self.NAME!r} BSDF needs the hits' differential geometry, which this "
-                "integrator does not pass (path and direct do)."
+                "integrator does not pass (path, direct, volpath and volpathmis do)."
             )
         if uv is None:
             uv = jnp.zeros(wavelength_nm.shape[:-1] + (2,), wavelength_nm.dtype)
