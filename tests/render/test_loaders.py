@@ -189,7 +189,7 @@ def _write(tmp_path, body: str):
     [
         ('<scene>\n  <shape type="rectangle">\n    <texture type="bitmap"/>\n  </shape>\n</scene>',
          r"bad.xml:3: <texture>: missing attribute 'name'"),
-        ('<scene>\n\n  <emitter type="projector"/>\n</scene>', r"bad.xml:3: .*unsupported emitter \(outside a <shape>\) type 'projector'"),  # noqa: E501
+        ('<scene>\n\n  <emitter type="sunsky"/>\n</scene>', r"bad.xml:3: .*unsupported emitter \(outside a <shape>\) type 'sunsky'"),  # noqa: E501
         ('<scene>\n  <volume/>\n</scene>', r"bad.xml:2: .*unsupported tag <volume>"),
         ('<scene>\n  <bsdf type="pplastic"/>\n</scene>', r"bad.xml:2: .*unsupported BSDF type 'pplastic'"),  # noqa: E501
         ('<scene>\n  <shape type="cube">\n   <float name="radius" value="1"/>\n  </shape>\n</scene>',  # noqa: E501
