@@ -41,9 +41,9 @@ and rejects everything else with an error that names the file, the line and the 
   `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
   `roughconductor` `specular_reflectance`; `roughconductor` and `roughdielectric` `alpha`,
   `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`; `normalmap`, `bumpmap`;
-  `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color` and every scalar Mitsuba
-  reads as a texture (`roughness`, `metallic`, `spec_trans`, `diff_trans`, ...; a thin
-  sheet's `eta` too, not the principled `eta` or `specular`).
+  `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color`
+  and every scalar Mitsuba reads as a texture (`roughness`, `metallic`, `spec_trans`,
+  `diff_trans`, ...; a thin sheet's `eta` too, not the principled `eta` or `specular`).
   Scalar parameters (roughness, weight, opacity) use the texels'
   luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables depend on it).
 - `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,
