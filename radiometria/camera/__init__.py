@@ -61,6 +61,7 @@ from ._io import (
 from ._orthographic import OrthographicCamera as OrthographicCamera
 from ._pinhole import (
     PinholeCamera as PinholeCamera,
+    fov_from_focal_length_deg as fov_from_focal_length_deg,
     fov_x_deg as fov_x_deg,
     generate_ray as generate_ray,
     look_at as look_at,

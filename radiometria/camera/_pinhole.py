@@ -317,6 +317,33 @@ def fov_x_deg(fov_deg: ArrayLike, aspect: float, fov_axis: str = "x") -> Float[A
     return jnp.rad2deg(2 * jnp.arctan(tan_x))
 
 
+def fov_from_focal_length_deg(focal_length_mm: float) -> float:
+    r"""Diagonal field of view of a lens of focal length $f$ on 35 mm film (36 x 24 mm), the
+    convention of Mitsuba's `focal_length` parameter (its fov axis is then `"diagonal"`):
+    $2 \arctan(\sqrt{36^2 + 24^2} / 2f)$.
+
+    **Arguments:**
+
+    - `focal_length_mm`: the focal length, finite and > 0. [mm]
+
+    **Returns:**
+
+    The diagonal field of view, in (0, 180). [deg]
+
+    !!! note "Thesis"
+        Thesis section 2.3.1 (film plane and field of view).
+
+    ??? cite "References"
+        `Jakob2022` (perspective sensor, `focal_length`).
+    """
+    f = float(focal_length_mm)
+    if not (math.isfinite(f) and f > 0.0):
+        raise ValueError(
+            f"`focal_length_mm` must be a finite value > 0 [mm], got {focal_length_mm}."
+        )
+    return math.degrees(2.0 * math.atan(math.hypot(36.0, 24.0) / (2.0 * f)))
+
+
 def perspective(
     fov_deg: ArrayLike, aspect: float, near: ArrayLike, far: ArrayLike, *, fov_axis: str = "x"
 ) -> Float[Array, "4 4"]:

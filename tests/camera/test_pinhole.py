@@ -239,3 +239,13 @@ def test_camera_rejects_bad_input():
     make = eqx.filter_jit(lambda fov: cam.PinholeCamera.from_to_world(CORNELL_TO_WORLD, fov, 8, 8))
     with pytest.raises(eqx.EquinoxRuntimeError, match="fov_deg"):
         make(jnp.asarray(200.0))
+
+
+def test_fov_from_focal_length_matches_published_35mm_angles():
+    # Diagonal angles of view of 35 mm lenses as photography tables list them (24 mm 84.1,
+    # 28 mm 75.4, 50 mm 46.8, 100 mm 24.4 degrees); Mitsuba's `focal_length` uses the same.
+    for f_mm, published in ((24.0, 84.1), (28.0, 75.4), (50.0, 46.8), (100.0, 24.4)):
+        assert cam.fov_from_focal_length_deg(f_mm) == pytest.approx(published, abs=0.05)
+    for bad in (0.0, -35.0, float("nan")):
+        with pytest.raises(ValueError, match=r"focal_length_mm.*> 0 \[mm\]"):
+            cam.fov_from_focal_length_deg(bad)

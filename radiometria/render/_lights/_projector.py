@@ -41,7 +41,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from ..._math import dot
-from ...camera import fov_x_deg
+from ...camera import fov_from_focal_length_deg, fov_x_deg
 from .._textures import AbstractTexture, TextureSpec
 from ._area import AreaLight, _mean_radiance
 from ._base import EmissionSample, LightSample
@@ -83,7 +83,7 @@ def _fov_x(params: dict, aspect: float, where: str) -> float:
         if not (math.isfinite(f_mm) and f_mm > 0):
             raise ValueError(f"{where}: parameter 'focal_length' must be a length > 0 in mm "
                              f"(e.g. '50mm'), got {params['focal_length']!r}.")  # fmt: skip
-        fov, axis = math.degrees(2 * math.atan(math.hypot(36.0, 24.0) / (2 * f_mm))), "diagonal"
+        fov, axis = fov_from_focal_length_deg(f_mm), "diagonal"
     return float(fov_x_deg(fov, aspect, axis))
 
 

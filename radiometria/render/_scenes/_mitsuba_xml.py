@@ -72,6 +72,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...camera import fov_from_focal_length_deg
 from ...radiometry import AbstractSpectrum, BlackbodySpectrum, PiecewiseLinearSpectrum
 from .._lights import read_envmap
 from .._registry import CAMERAS, INTEGRATORS, LIGHTS, MATERIALS, SAMPLERS
@@ -923,7 +924,9 @@ def _sensor(ctx: _Ctx, node: _Node):
     else:
         f_mm = props.get("focal_length", "50mm").strip().removesuffix("mm")
         f_mm = float(ctx.floats(node, f_mm, 1)[0])
-        fov = math.degrees(2 * math.atan(math.hypot(36.0, 24.0) / (2 * f_mm)))
+        if not (math.isfinite(f_mm) and f_mm > 0):
+            raise ctx.err(node, f"focal_length must be > 0 [mm], got {f_mm}")
+        fov = fov_from_focal_length_deg(f_mm)
         axis = "diagonal"
     if fov is None or not 0 < fov < 180:
         raise ctx.err(node, f"fov must be in (0, 180) degrees, got {fov}")
