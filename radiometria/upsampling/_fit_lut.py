@@ -46,6 +46,7 @@ from ._lm import (
     target_Lab,
 )
 from ._lut import REFINE_STEPS, RGBToSpectrumLUT, brightness_scale
+from ._tails import suppress_infrared_tails
 
 WHITE_C2 = 2048.0  # c2 of the white node (module docstring)
 
@@ -86,6 +87,11 @@ class LUTFitResult(eqx.Module):
         """Boolean (3, res, res, res): no sigmoid spectrum reaches the colour (best fit kept)."""
         return self.result._value == RESULTS.out_of_reach._value
 
+    @property
+    def tail_free(self) -> Array:
+        """Boolean (3, res, res, res): refitted without an infrared tail (`_tails.py`)."""
+        return self.result._value == RESULTS.tail_free._value
+
     def summary(self) -> dict:
         """Residual distribution of the table points and outcome counts (plain Python)."""
         r = np.asarray(self.residual).ravel()
@@ -94,13 +100,15 @@ class LUTFitResult(eqx.Module):
         q = np.quantile(rf, [0.5, 0.9, 0.99, 0.999, 1.0]) if rf.size else np.zeros(5)
         conv = np.asarray(self.converged).ravel()
         oor = np.asarray(self.out_of_reach).ravel()
+        tail = np.asarray(self.tail_free).ravel()
         return {
             "entries": int(r.size),
             "fitted": int(fitted.sum()),
             "closed_form": int((~fitted).sum()),
             "converged": int(conv.sum()),
             "out_of_reach": int(oor.sum()),
-            "not_converged": int((~conv & ~oor).sum()),
+            "not_converged": int((~conv & ~oor & ~tail).sum()),
+            "tail_free": int(tail.sum()),
             "repaired": self.num_repaired,
             "residual_median": float(q[0]),
             "residual_p90": float(q[1]),
@@ -121,7 +129,9 @@ class RESULTS(optx.RESULTS):
     stationary point (a failure; `fit_lut(throw=True)` raises);
     `out_of_reach`: above the tolerance at a stationary point of the least-squares problem:
     no sigmoid-polynomial reflectance in [0, 1] reproduces the colour (wide-gamut spaces have
-    colours beyond the object-colour solid), and the entry is the best fit.
+    colours beyond the object-colour solid), and the entry is the best fit;
+    `tail_free`: the fit had an infrared tail and the entry is the tail stage's refit (within
+    `_tails.TAIL_TOLERANCE` of the colour, tail ratio at most `_tails.TAIL_RATIO`).
 
     ??? cite "References"
         `Rader2024` (optimistix's `RESULTS`); thesis eq. 2.27.
@@ -131,11 +141,21 @@ class RESULTS(optx.RESULTS):
         "No spectrum s(c0 l^2 + c1 l + c2) reproduces this colour within the tolerance; the "
         "entry is the least-squares best fit (a stationary point)."
     )
+    tail_free = (
+        "The fit of this colour has an infrared tail (pbrt-v4 #82); the entry is the tail-free "
+        "refit of the tail stage, within its tolerance of the colour (`_tails.py`)."
+    )
 
 
 def _results_array(code: np.ndarray) -> RESULTS:
-    """A `RESULTS` array from integer codes 0 (successful), 1 (max steps), 2 (out of reach)."""
-    items = [RESULTS.successful, RESULTS.nonlinear_max_steps_reached, RESULTS.out_of_reach]
+    """A `RESULTS` array from integer codes 0 (successful), 1 (max steps), 2 (out of reach),
+    3 (tail-free refit)."""
+    items = [
+        RESULTS.successful,
+        RESULTS.nonlinear_max_steps_reached,
+        RESULTS.out_of_reach,
+        RESULTS.tail_free,
+    ]
     values = np.asarray([int(it._value) for it in items])[np.asarray(code)]
     # An enumeration item is a pytree whose one leaf is its integer value.
     return jax.tree_util.tree_map(lambda v: jnp.asarray(values, v.dtype), items[0])
@@ -406,6 +426,7 @@ def fit_lut(
     devices=None,
     progress=None,
     throw: bool = True,
+    infrared_tails: bool = True,
 ) -> LUTFitResult:
     r"""Fit the coefficient table of an RGB colour space (thesis eq. 2.27, section 2.2.3).
 
@@ -420,7 +441,10 @@ def fit_lut(
     iterations; (2) the columns with an entry above `tolerance` are swept again with up to
     `retry_steps` iterations per step and no early exit (the same compiled function), keeping
     the better entry; (3) whatever is still above `tolerance` is refitted from its neighbours
-    along brightness (`repair_rounds` rounds of `repair_steps` iterations; rarely needed).
+    along brightness (`repair_rounds` rounds of `repair_steps` iterations; rarely needed);
+    (4) with `infrared_tails`, entries whose reflectance has an infrared tail are refitted
+    without it where that keeps the colour within `_tails.TAIL_TOLERANCE`
+    (`_tails.suppress_infrared_tails`: pbrt-v4 #82, the darkest reds).
 
     **Arguments:**
 
@@ -438,6 +462,7 @@ def fit_lut(
     - `devices`: sequence of devices to shard the columns over (None: default device).
     - `progress`: optional callable `progress(stage: str, done: int, total: int)`.
     - `throw`: raise `RuntimeError` if an entry misses the tolerance at the end.
+    - `infrared_tails`: run stage (4) (default; False gives the colour-only table, as pbrt's).
 
     **Returns:**
 
@@ -561,6 +586,14 @@ def fit_lut(
     stat_t = stationary.reshape(res, 3, res, res).transpose(1, 0, 2, 3)
     ok = (resid_t <= tolerance) | exact_t
     code = np.where(ok, 0, np.where(stat_t, 2, 1))
+    # (4) The infrared-tail stage, on the finished table (`_tails.py`).
+    tail_report = "off"
+    if infrared_tails:
+        stage = suppress_infrared_tails(table, scale_np, model.colourspace, progress=progress)
+        table = stage.coeffs
+        resid_t = np.where(stage.replaced, stage.residual, resid_t).astype(resid_t.dtype)
+        code = np.where(stage.replaced, 3, code)
+        tail_report = stage.report
     result = _results_array(code)
     # Entries no reflectance reaches: this table's lookups are refined by the fit (`_lut.py`).
     refine = REFINE_STEPS if bool(np.any(code == 2)) else 0
@@ -586,6 +619,7 @@ def fit_lut(
         "repair_rounds": repair_rounds,
         "start_index": k0,
         "white_c2": WHITE_C2,
+        "infrared_tails": tail_report,
     }
     out = LUTFitResult(
         lut=lut,

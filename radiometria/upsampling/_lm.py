@@ -117,7 +117,8 @@ def _lm_direction(J: Array, r: Array, mu: Array) -> Array:
 
     $D = \mathrm{diag}(|J_{:,i}|)$ (Marquardt's scaling). Solved as the linear least-squares
     problem $[J; \sqrt\mu D]\,\delta \approx [-r; 0]$ by modified Gram-Schmidt on the
-    augmented (6, 4) matrix (backward stable for least squares, Bjorck 1967), never by the
+    augmented (m + 3, 4) matrix (m residuals: 3 for eq. 2.27, 4 with the tail penalty of
+    `_tails.py`) (backward stable for least squares, Bjorck 1967), never by the
     normal equations: their condition number is cond(J)^2, which reaches 1e7 for the narrow
     spectra of dark saturated colours and made float32 solves stall. Batched over leading axes,
     closed form, branch-free; a zero pivot gives a zero step component.
@@ -127,8 +128,8 @@ def _lm_direction(J: Array, r: Array, mu: Array) -> Array:
     damp = jnp.sqrt(mu)[..., None] * d  # (n, 3)
     eye = jnp.eye(3, dtype=dtype)
     eye = eye.reshape((1,) * (J.ndim - 2) + (3, 3))
-    A = jnp.concatenate([J, damp[..., None, :] * eye], axis=-2)  # (n, 6, 3)
-    b = jnp.concatenate([-r, jnp.zeros_like(r)], axis=-1)  # (n, 6)
+    A = jnp.concatenate([J, damp[..., None, :] * eye], axis=-2)  # (n, m + 3, 3)
+    b = jnp.concatenate([-r, jnp.zeros(r.shape[:-1] + (3,), dtype)], axis=-1)  # (n, m + 3)
     cols = [A[..., :, 0], A[..., :, 1], A[..., :, 2], b]
     R = [[None] * 4 for _ in range(3)]
     for k in range(3):

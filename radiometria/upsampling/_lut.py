@@ -40,13 +40,14 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
 from ._forward import forward_model
-from ._lm import ModelArrays, _lm_direction, lm_init, lm_iterate, target_Lab
+from ._lm import ModelArrays, _lm_direction, residual_and_jacobian, target_Lab
 from ._sigmoid_polynomial import (
     common_float_dtype,
     grey_coefficients,
     nm_to_normalised_coefficients,
     normalised_to_nm_coefficients,
 )
+from ._tails import TAIL_RATIO, TAIL_TOLERANCE, TAIL_WEIGHT, _penalised_lm
 
 # Levenberg-Marquardt iterations of each of a refined lookup's two starts (module docstring):
 # 16 left max CIEDE2000 0.36-0.47 on Rec.2020 and ACEScg, 32 gives 0.02-0.06.
@@ -246,18 +247,29 @@ def _refine(lut: RGBToSpectrumLUT, rgb: Array, c_nm: Array) -> Array:
     sg = jax.lax.stop_gradient
     start = sg(nm_to_normalised_coefficients(c_nm))
     start = jnp.where(jnp.isfinite(start), start, 0.0)
-    n = lut.refine_steps + 1  # the first iteration evaluates the start point
-    # Both starts in one batch (rows are independent): one compiled copy of the iteration.
+    # Four runs in one batch (rows are independent, one compiled copy of the iteration): both
+    # starts on eq. 2.27 alone and both on eq. 2.27 with the infrared-tail hinge (`_tails.py`).
     k = start.shape[0]
-    both = lm_iterate(
-        lm_init(jnp.concatenate([start, jnp.zeros_like(start)])),
-        jnp.concatenate([sg(lab_t), sg(lab_t)]),
-        m,
-        n,
-    )
-    first = (both.cost[:k] <= both.cost[k:]) | ~jnp.isfinite(both.cost[k:])
-    c = jnp.where(first[:, None], both.c[:k], both.c[k:])
-    J = jnp.where(first[:, None, None], both.J[:k], both.J[k:])
+    starts = jnp.concatenate([start, jnp.zeros_like(start)] * 2)
+    lab4 = jnp.concatenate([sg(lab_t)] * 4)
+    weight = jnp.repeat(jnp.asarray([0.0, TAIL_WEIGHT], dtype), 2 * k)
+    bound = jnp.asarray(np.log(TAIL_RATIO), dtype)
+    c4, de4, q4, cost4 = _penalised_lm(starts, lab4, m, bound, weight, lut.refine_steps)
+    cost4 = jnp.where(jnp.isfinite(cost4), cost4, jnp.inf)
+
+    def better(i, j):  # the better of runs i and j (rows i k .. (i + 1) k) by their own cost
+        a, b = slice(i * k, (i + 1) * k), slice(j * k, (j + 1) * k)
+        first = cost4[a] <= cost4[b]
+        pick = lambda v: jnp.where(first.reshape((k,) + (1,) * (v.ndim - 1)), v[a], v[b])  # noqa: E731
+        return pick(c4), pick(de4), pick(q4)
+
+    c_col, _, q_col = better(0, 1)
+    c_pen, de_pen, _ = better(2, 3)
+    # The tail-free fit wins where the colour-only fit has a tail and it keeps the colour
+    # within TAIL_TOLERANCE (the trade the table's tail stage makes at its nodes).
+    use_pen = (q_col > bound) & (de_pen <= TAIL_TOLERANCE)
+    c = jnp.where(use_pen[:, None], c_pen, c_col)
+    _, J = residual_and_jacobian(c, sg(lab_t), m)
     # dc = J^+ d Lab_t: the least-squares step for the residual change -(Lab_t - sg(Lab_t)).
     step = _lm_direction(J, sg(lab_t) - lab_t, jnp.zeros(c.shape[:1], dtype))
     return normalised_to_nm_coefficients(c + step).astype(dtype)

@@ -11,6 +11,12 @@ in `_data.py`, with the fit settings, the residual distribution of the table poi
 statistics in its metadata. Nothing time-dependent goes into the file (the fit's wall time is
 printed, not stored), so the same table gives the same bytes. It prints the metadata and the
 file's sha256, which goes into `_data.PACKAGED_SHA256` and the `_data.py` docstring.
+
+`python -m radiometria.upsampling._make_data --tails-only [SPACE ...]` runs only `fit_lut`'s
+last stage (the infrared-tail refit, `_tails.suppress_infrared_tails`) on the packaged table,
+the output of stages 1-3, and rewrites the file with the stage's report in `metadata["fit"]`
+and the statistics measured again: the table `fit_lut` gives today, without refitting the
+786 432 entries that the stage does not touch.
 """
 
 import hashlib
@@ -24,9 +30,10 @@ import numpy as np
 
 from .._io import write_npz_deterministic
 from ..colorimetry import get_colourspace
-from ._data import DATA_DIR, PACKAGED_FILES, encode_planes
+from ._data import DATA_DIR, PACKAGED_FILES, encode_planes, read_packaged
 from ._fit_lut import fit_lut
 from ._io import checksum
+from ._lut import REFINE_STEPS, RGBToSpectrumLUT
 from ._roundtrip import (
     has_reflectance,
     roundtrip_delta_E,
@@ -34,6 +41,7 @@ from ._roundtrip import (
     roundtrip_random_rgb,
     roundtrip_statistics,
 )
+from ._tails import suppress_infrared_tails
 
 FORMAT = "radiometria-rgb2spec-planes"
 LINEAR_GRID = 49  # the dense linear grid of the RGB cube: 49^3 = 117 649 colours
@@ -76,6 +84,40 @@ def measure(lut) -> dict:
         }
 
 
+def _write(out: Path, scale, coeffs, meta: dict) -> dict:
+    arrays = {
+        "scale": scale,
+        "coeffs_planes": encode_planes(coeffs),
+        "metadata": np.asarray(json.dumps(meta, sort_keys=True)),
+    }
+    write_npz_deterministic(out, arrays, mode=0o644)
+    return {**meta, "file_sha256": hashlib.sha256(out.read_bytes()).hexdigest()}
+
+
+def apply_tail_stage(space="sRGB", out=None) -> dict:
+    """Run `fit_lut`'s stage (4) on a packaged table and rewrite it (module docstring)."""
+    name = get_colourspace(space).name
+    src = DATA_DIR / PACKAGED_FILES[name]
+    out = Path(src if out is None else out)
+    scale, coeffs, meta = read_packaged(src)
+    if meta["fit"].get("infrared_tails", "off") != "off":
+        raise ValueError(f"{src}: the tail stage has already run on this table.")
+    stage = suppress_infrared_tails(coeffs, scale, name)
+    coeffs = np.asarray(stage.coeffs, np.float32)
+    n = int(stage.replaced.sum())
+    meta = dict(meta)
+    meta["fit"] = {**meta["fit"], "infrared_tails": stage.report}
+    summary = dict(meta["fit_summary"])
+    summary["converged"] -= n  # they were converged on a tail, now tail-free refits
+    summary["tail_free"] = n
+    meta["fit_summary"] = summary
+    meta["sha256"] = checksum(scale, coeffs)
+    lut = RGBToSpectrumLUT(scale, coeffs, name, REFINE_STEPS if summary["out_of_reach"] else 0)
+    meta.update(measure(lut))
+    meta["created_by"] = f"radiometria {importlib.metadata.version('radiometria')}"
+    return _write(out, scale, coeffs, meta)
+
+
 def build_data(space="sRGB", out=None, *, resolution: int = 64) -> dict:
     """Fit, measure and write one packaged table; return its metadata (plus `file_sha256`)."""
     name = get_colourspace(space).name
@@ -99,21 +141,17 @@ def build_data(space="sRGB", out=None, *, resolution: int = 64) -> dict:
         **measure(fit.lut),
         "created_by": f"radiometria {importlib.metadata.version('radiometria')}",
     }
-    arrays = {
-        "scale": scale,
-        "coeffs_planes": encode_planes(coeffs),
-        "metadata": np.asarray(json.dumps(meta, sort_keys=True)),
-    }
-    write_npz_deterministic(out, arrays, mode=0o644)
     print(f"{name}: fit {fit.seconds:.1f} s", file=sys.stderr)
-    return {**meta, "file_sha256": hashlib.sha256(out.read_bytes()).hexdigest()}
+    return _write(out, scale, coeffs, meta)
 
 
 if __name__ == "__main__":
     from ._cli import _use_all_cpu_cores
 
     _use_all_cpu_cores()
-    spaces = sys.argv[1:] or list(PACKAGED_FILES)
+    args = sys.argv[1:]
+    tails_only = "--tails-only" in args
+    spaces = [a for a in args if a != "--tails-only"] or list(PACKAGED_FILES)
     for sp in spaces:
-        meta = build_data(sp)
+        meta = apply_tail_stage(sp) if tails_only else build_data(sp)
         print(json.dumps({k: meta[k] for k in meta if k != "fit"}, indent=2))

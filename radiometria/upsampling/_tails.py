@@ -1,0 +1,297 @@
+r"""Infrared tails of upsampled reflectances (pbrt-v4 #82) and the fit stage that removes them.
+
+**The failure.** Eq. 2.27 sees a reflectance only through the colour-matching functions, which
+above 730 nm are below 0.2 % of their peaks. A dark saturated colour therefore has two kinds of
+exact solution: a low bump under the CMFs, and a sigmoid whose rising edge sits past 730 nm,
+nearly 0 in the visible and close to 1 in the infrared. The continuation of `fit_lut` along
+brightness follows a bright red's rising edge down into the dark levels, so the table's darkest
+reds are of the second kind: pbrt-v4 issue #82 reports the colour (1.07e-4, 0, 1.05e-5) turned
+into a reflectance near 1 above 760 nm, and radiometria's tables reproduced it (tail ratio
+1e3-4e3). Both kinds have the same colour, but a spectral renderer samples wavelengths up to
+830 nm, where such a "dark" surface reflects as a white one would (and a medium whose
+coefficients are upsampled from it is transparent there).
+
+**Tail ratio.** $q(c) = \max_{\lambda > 730} S(\lambda) / \max_{\lambda \le 730} S(\lambda)$
+on the forward model's wavelength grid. $S = s(x)$ with $s$ increasing, so both maxima are the
+sigmoid of the polynomial's maxima, and $\ln q$ has the closed-form gradient
+$(s'/s)(x_t)\,\partial x_t/\partial c - (s'/s)(x_v)\,\partial x_v/\partial c$ at the two
+maximising wavelengths (a subgradient where a maximum is shared).
+
+**The stage** (`suppress_infrared_tails`, stage 4 of `fit_lut`). Every entry with
+$q > $ `tail_ratio` is fitted again with eq. 2.27 plus one residual more,
+$w \max(0, \ln q - \ln T)$ (a hinge on the log tail ratio, zero for every spectrum without a
+tail, so a tail-free exact solution has cost 0), by the same Levenberg-Marquardt iteration
+(`_lm.py`), from three starts: the entry itself, the entry one brightness node up (already
+processed: the stage walks down from the top, so a tail-free solution is continued downwards
+as the fit's sweep continues its solutions), and a bump of the entry's brightness centred
+where its own spectrum peaks in the visible. The refit replaces the entry only where it
+reproduces the colour within the fit's tolerance with $q \le T$; entries whose colours only
+tail-rising spectra reach (bright saturated reds whose reflectance rises past 730 nm) are
+kept, and counted.
+
+References: pbrt-v4 issue #82 ("RGBAlbedoSpectrum of near-black colours has a large
+infrared tail"); `Jakob2019` (the sigmoid polynomial and its table); `Marquardt1963`.
+"""
+
+import functools
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+from jaxtyping import Array
+
+from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
+from ._forward import forward_model
+from ._lm import ModelArrays, _lm_direction, residual_and_jacobian, target_Lab
+from ._sigmoid_polynomial import _sigmoid
+
+TAIL_START_NM = 730.0  # above it the CIE 1931 CMFs are below 0.2 % of their peaks
+TAIL_RATIO = 2.0  # the stage's bound on q at the table's nodes (lookups interpolate between)
+TAIL_WEIGHT = 10.0  # w: Delta E*ab per unit of ln q above the bound
+TAIL_STEPS = 200
+TAIL_TOLERANCE = 0.05  # Delta E*ab a tail-free refit may trade (1/20 of a JND)
+_DEBUG = True  # Levenberg-Marquardt iterations per start
+
+
+def _tail_mask(m: ModelArrays) -> Array:
+    t = (TAIL_START_NM - VISIBLE_WAVELENGTH_MIN_NM) / (
+        VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM
+    )
+    return m.lam > t
+
+
+def _log_s_and_slope(x: Array) -> tuple[Array, Array]:
+    """ln s(x) and d ln s / dx = s'(x) / s(x) of the Jakob sigmoid, stable for x << 0."""
+    ax = jnp.abs(x)
+    r = jnp.sqrt(1.0 + ax * ax)
+    lower = -jnp.log(2.0 * r * (r + ax))  # ln s(-|x|), no cancellation
+    s = _sigmoid(x)
+    log_s = jnp.where(x < 0, lower, jnp.log(s))
+    return log_s, 0.5 / (r * r * r) / s
+
+
+def log_tail_ratio(c: Array, m: ModelArrays) -> tuple[Array, Array]:
+    r"""$\ln q$ (n,) and its gradient in the normalised coefficients `c` (n, 3) (module
+    docstring)."""
+    tail = _tail_mask(m)
+    lam = m.lam[None, :]
+    x = (c[:, 0:1] * lam + c[:, 1:2]) * lam + c[:, 2:3]  # (n, L)
+    it = jnp.argmax(jnp.where(tail[None, :], x, -jnp.inf), axis=-1)
+    iv = jnp.argmax(jnp.where(tail[None, :], -jnp.inf, x), axis=-1)
+    xt = jnp.take_along_axis(x, it[:, None], 1)[:, 0]
+    xv = jnp.take_along_axis(x, iv[:, None], 1)[:, 0]
+    lt, gt = _log_s_and_slope(xt)
+    lv, gv = _log_s_and_slope(xv)
+    basis = lambda lam: jnp.stack([lam * lam, lam, jnp.ones_like(lam)], -1)  # noqa: E731
+    grad = gt[:, None] * basis(m.lam[it]) - gv[:, None] * basis(m.lam[iv])
+    return lt - lv, grad
+
+
+def penalised_residual_and_jacobian(c, lab_t, m: ModelArrays, log_bound, weight):
+    """Eq. 2.27's residual (n, 3) plus the tail hinge, as (n, 4) with Jacobian (n, 4, 3)."""
+    r, J = residual_and_jacobian(c, lab_t, m)
+    q, g = log_tail_ratio(c, m)
+    active = q > log_bound
+    w = jnp.broadcast_to(jnp.asarray(weight, q.dtype), q.shape)  # a scalar or one per row
+    rt = w * jnp.where(active, q - log_bound, 0.0)
+    Jt = w[:, None] * jnp.where(active[:, None], g, 0.0)
+    return jnp.concatenate([r, rt[:, None]], -1), jnp.concatenate([J, Jt[:, None, :]], -2)
+
+
+@functools.partial(jax.jit, static_argnames=("n_steps",))
+def _penalised_lm(c0, lab_t, m, log_bound, weight, n_steps: int):
+    """`n_steps` Levenberg-Marquardt iterations (the acceptance rule of `_lm.lm_step`) on the
+    penalised residual; returns the best coefficients, the colour residual norm (Delta E*ab)
+    and ln q there."""
+    rj = lambda c: penalised_residual_and_jacobian(c, lab_t, m, log_bound, weight)  # noqa: E731
+    r, J = rj(c0)
+    cost = jnp.sum(r * r, -1)
+    cost = jnp.where(jnp.isfinite(cost), cost, jnp.inf)
+    mu = jnp.full(cost.shape, 1e-4, c0.dtype)
+
+    def body(_, s):
+        c, r, J, cost, mu = s
+        cn = c + _lm_direction(J, r, mu)
+        rn, Jn = rj(cn)
+        cost_n = jnp.sum(rn * rn, -1)
+        ok = (cost_n < cost) & jnp.isfinite(cost_n)
+        c = jnp.where(ok[:, None], cn, c)
+        r = jnp.where(ok[:, None], rn, r)
+        J = jnp.where(ok[:, None, None], Jn, J)
+        cost = jnp.where(ok, cost_n, cost)
+        mu = jnp.clip(jnp.where(ok, mu * 0.2, mu * 8.0), 1e-9, 1e9)
+        return c, r, J, cost, mu
+
+    c, r, J, cost, mu = lax.fori_loop(0, n_steps, body, (c0, r, J, cost, mu))
+    return c, jnp.linalg.norm(r[:, :3], axis=-1), log_tail_ratio(c, m)[0], cost
+
+
+def _nm_to_normalised_np(c: np.ndarray) -> np.ndarray:
+    """NumPy inverse of `_fit_lut._normalised_to_nm_np` (float64)."""
+    a = VISIBLE_WAVELENGTH_MIN_NM
+    w = VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM
+    A, B, C = c[..., 0], c[..., 1], c[..., 2]
+    return np.stack([A * w * w, (B + 2.0 * A * a) * w, C + B * a + A * a * a], -1)
+
+
+def _normalised_to_nm_np(c: np.ndarray) -> np.ndarray:
+    a = VISIBLE_WAVELENGTH_MIN_NM
+    b = 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
+    A, B, C = c[..., 0], c[..., 1], c[..., 2]
+    return np.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
+
+
+def _level_rgb(res: int, z: float) -> np.ndarray:
+    """Target RGB of the entries (l, j, i) of one brightness node, (3 res res, 3)."""
+    t = np.arange(res) / (res - 1)
+    j, i = np.meshgrid(np.arange(res), np.arange(res), indexing="ij")
+    rgb = np.zeros((3, res, res, 3))
+    for ch in range(3):
+        rgb[ch, :, :, ch] = z
+        rgb[ch, :, :, (ch + 1) % 3] = t[i] * z
+        rgb[ch, :, :, (ch + 2) % 3] = t[j] * z
+    return rgb.reshape(-1, 3)
+
+
+def _bump_start(c: np.ndarray, m_lam: np.ndarray, vis: np.ndarray, z: float) -> np.ndarray:
+    """A concave parabola of peak value s^-1(z) at the visible argmax of each spectrum `c`."""
+    x = (c[:, 0:1] * m_lam + c[:, 1:2]) * m_lam + c[:, 2:3]
+    peak = m_lam[np.argmax(np.where(vis, x, -np.inf), axis=1)]
+    peak = np.clip(peak, 0.05, 0.75)
+    x0 = (z - 0.5) / np.sqrt(z * (1.0 - z))  # the grey closed form's inverse sigmoid
+    a = 40.0
+    return np.stack([-a * np.ones_like(peak), 2 * a * peak, x0 - a * peak * peak], -1)
+
+
+def tail_ratios(coeffs_nm: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
+    """q of nm coefficients (..., 3) on the forward model's grid (float64, NumPy)."""
+    with jax.enable_x64(True):
+        m = ModelArrays.build(forward_model(colourspace), jnp.float64)
+        c = _nm_to_normalised_np(np.asarray(coeffs_nm, np.float64).reshape(-1, 3))
+        q, _ = log_tail_ratio(jnp.asarray(c), m)
+        return np.exp(np.asarray(q)).reshape(np.shape(coeffs_nm)[:-1])
+
+
+class TailStage(NamedTuple):
+    """What `suppress_infrared_tails` returns."""
+
+    coeffs: np.ndarray  # (3, res, res, res, 3) the new table, nm coefficients
+    replaced: np.ndarray  # (3, res, res, res) bool: the entries refitted without a tail
+    residual: np.ndarray  # (3, res, res, res) Delta E*ab of the replaced entries (0 elsewhere)
+    report: dict  # counts and bounds, JSON-able
+
+
+def suppress_infrared_tails(
+    coeffs_nm: np.ndarray,
+    scale: np.ndarray,
+    colourspace: str,
+    *,
+    tail_ratio: float = TAIL_RATIO,
+    tolerance: float = TAIL_TOLERANCE,
+    n_steps: int = TAIL_STEPS,
+    weight: float = TAIL_WEIGHT,
+    progress=None,
+) -> TailStage:
+    r"""Refit the table entries whose reflectance has an infrared tail (module docstring).
+
+    **Arguments:**
+
+    - `coeffs_nm`: the table, (3, res, res, res, 3) nm coefficients in `RGBToSpectrumLUT`'s
+        layout (not modified).
+    - `scale`: its brightness nodes (res,). [-]
+    - `colourspace`: the table's colour space (its forward model).
+    - `tail_ratio`: the bound T on q at a node. [-]
+    - `tolerance`: the colour error $\Delta E^*_{ab}$ a tail-free refit may have and still
+        replace the entry. [-]
+    - `n_steps`, `weight`: Levenberg-Marquardt iterations per start and the hinge's weight w.
+    - `progress`: optional `progress("tails", done, total)` per brightness node.
+
+    **Returns:**
+
+    A `TailStage`: the new table (same dtype; entries without a tail, the grey column and the
+    entries no tail-free refit reproduces are unchanged bit for bit; row 0 = row 1 as in
+    `fit_lut`), which entries were replaced and their colour error, and a report (entries
+    with a tail, replaced, kept, largest q left, the bounds used).
+    """
+    coeffs_nm = np.asarray(coeffs_nm)
+    res = coeffs_nm.shape[1]
+    if coeffs_nm.shape != (3, res, res, res, 3) or np.shape(scale) != (res,):
+        raise ValueError(
+            f"`coeffs_nm` must have shape (3, res, res, res, 3) and `scale` (res,), got "
+            f"{coeffs_nm.shape} and {np.shape(scale)}."
+        )
+    out = coeffs_nm.copy()
+    replaced = np.zeros((3, res, res, res), bool)
+    residual = np.zeros((3, res, res, res))
+    scale = np.asarray(scale, np.float64)
+    log_bound = float(np.log(tail_ratio))
+    grey = np.zeros((3, res, res), bool)
+    grey[:, res - 1, res - 1] = True
+    grey = grey.reshape(-1)
+    n_tail = 0
+    with jax.enable_x64(True):
+        m = ModelArrays.build(forward_model(colourspace), jnp.float64)
+        lam = np.asarray(m.lam)
+        vis = ~np.asarray(_tail_mask(m))
+        below = None  # the processed node k - 1, normalised
+        for k in range(1, res):
+            own = _nm_to_normalised_np(out[:, k].reshape(-1, 3).astype(np.float64))
+            q = np.asarray(log_tail_ratio(jnp.asarray(own), m)[0])
+            cand = np.flatnonzero((q > log_bound) & ~grey)
+            if cand.size:
+                n_tail += cand.size
+                starts = [own[cand], _bump_start(own[cand], lam, vis, scale[k])]
+                if below is not None:
+                    # Dark spectra are s(x) ~ 1 / (4 x^2): the node below, scaled to this
+                    # brightness with its shape kept, is c * sqrt(z_below / z).
+                    starts += [below[cand], below[cand] * np.sqrt(scale[k - 1] / scale[k])]
+                c, de, qn = _best_of_starts(
+                    starts, _level_rgb(res, scale[k])[cand], m, log_bound, weight, n_steps
+                )
+                new_nm = _normalised_to_nm_np(c)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    finite = np.all(np.isfinite(new_nm.astype(out.dtype)), -1)
+                ok = (de <= tolerance) & (qn <= log_bound + 1e-3) & finite
+                idx = cand[ok]
+                l_, j_, i_ = np.unravel_index(idx, (3, res, res))
+                out[l_, k, j_, i_] = new_nm[ok].astype(out.dtype)
+                replaced[l_, k, j_, i_] = True
+                residual[l_, k, j_, i_] = de[ok]
+                own[idx] = c[ok]
+            below = own
+            if progress is not None:
+                progress("tails", k, res - 1)
+        out[:, 0] = out[:, 1]
+        replaced[:, 0], residual[:, 0] = replaced[:, 1], residual[:, 1]
+        q_left = tail_ratios(out[:, 1:], colourspace)
+        q_left[:, :, res - 1, res - 1] = 0.0  # greys: exactly flat
+    report = {
+        "tail_start_nm": TAIL_START_NM,
+        "tail_ratio_bound": float(tail_ratio),
+        "tolerance_delta_E_ab": float(tolerance),
+        "entries_with_tail": int(n_tail),
+        "replaced": int(replaced[:, 1:].sum()),
+        "kept": int(n_tail - replaced[:, 1:].sum()),
+        "residual_max_replaced": float(residual.max()),
+        "max_tail_ratio_left": float(q_left.max()),
+    }
+    return TailStage(out, replaced, residual, report)
+
+
+def _best_of_starts(starts, rgb, m, log_bound, weight, n_steps):
+    """The penalised fit from every start (one batch, padded to a power of two to bound
+    recompilation); per entry the run of lowest penalised cost: (c, Delta E*ab, ln q)."""
+    n, ns = rgb.shape[0], len(starts)
+    size = 1 << int(np.ceil(np.log2(max(n, 64))))
+    pad = lambda a, v=0.0: np.pad(a, ((0, size - n), (0, 0)), constant_values=v)  # noqa: E731
+    c0 = jnp.asarray(np.concatenate([pad(s) for s in starts]))
+    lab_t = target_Lab(jnp.asarray(np.tile(pad(rgb, 0.5), (ns, 1))), m)
+    c, de, qn, cost = _penalised_lm(c0, lab_t, m, log_bound, weight, n_steps)
+    c, de, qn, cost = (
+        np.asarray(a).reshape((ns, size) + a.shape[1:])[:, :n] for a in (c, de, qn, cost)
+    )
+    best = np.argmin(np.where(np.isfinite(cost), cost, np.inf), axis=0)
+    take = lambda a: a[best, np.arange(n)]  # noqa: E731
+    return take(c), take(de), take(qn)
