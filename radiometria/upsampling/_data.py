@@ -3,24 +3,29 @@ r"""The packaged coefficient tables (sRGB, Display P3, Rec.2020, ACEScg) and `ge
 **Files.** `data/` holds one res-64 float32 table per colour space that pbrt-v4 also ships:
 
 - sRGB: `srgb_64.npz`, sha256
-  `5dc4c8793f11b6b6be35c3178f68be9200f7238350b7ea07e9ed3c648bbe8d3c`;
+  `2f3641af6caa57174ce73a779838ed1baedec6ec0b39f1fcd8a365317f729bb8`;
 - Display P3: `display_p3_64.npz`, sha256
-  `4d0f582612934ab9f9a1234325fc382f867bfd56faf316193927b8c6131f4ff6`;
+  `7b00952161c5feac057628bb19dc2319df381183f97dc0c88e89d0563c1af844`;
 - ITU-R BT.2020 (Rec.2020): `rec2020_64.npz`, sha256
-  `326911a51d3e46f98725fabe277c4db76a9d78f1bc26920204a39579778a0c07`;
+  `7afdebaffbfaadb9e1f0f9718bec57bfe91264d65063226c9745a479881a988c`;
 - ACEScg: `acescg_64.npz`, sha256
-  `dc9dc7acb8d26698d8154eac3da68d1df93632b3a0b8cd11ac6d8a2921f14d8d`.
+  `ac2e2a26754a66623c16543419aad7e092c0fc874c86a313eff5b732bc9f33ac`.
 
 (`PACKAGED_SHA256` holds the same values; `tests/upsampling/test_wide_gamut.py` checks them.)
 
 **Provenance.** Source: this package's own fit (`fit_lut(space, 64)`, default settings,
 float32), regenerated with `python -m radiometria.upsampling._make_data [SPACE ...]`; no
-third-party table is copied. Inputs: the CIE 1931 2° colour-matching functions and the CIE
-illuminants D65 (sRGB, Display P3, Rec.2020) and CIE daylight at 6000 K x 1.4388/1.4380
-(ACEScg's ACES white, as pbrt), from `radiometria.colorimetry`'s packaged CIE tables (see
-`colorimetry/_data.py` for their source, licence and sha256); the colour spaces' primaries and
-whites from `colorimetry.RGB_COLOURSPACES`. Licence: the package's (Apache-2.0). Created
-2026-11-24 (sRGB earlier in the same release); `metadata["created_by"]` names the version.
+third-party table is copied. The fit's last stage, the infrared-tail refit (`_tails.py`,
+pbrt-v4 #82), was added after the tables were first fitted and was run on them with
+`_make_data --tails-only` (the stage reads only the finished table, so this is the table
+`fit_lut` gives); it replaced 12 699 (sRGB), 12 015 (Display P3), 11 589 (Rec.2020) and
+11 243 (ACEScg) entries, and its report is in `metadata["fit"]["infrared_tails"]`. Inputs:
+the CIE 1931 2° colour-matching functions and the CIE illuminants D65 (sRGB, Display P3,
+Rec.2020) and CIE daylight at 6000 K x 1.4388/1.4380 (ACEScg's ACES white, as pbrt), from
+`radiometria.colorimetry`'s packaged CIE tables (see `colorimetry/_data.py` for their source,
+licence and sha256); the colour spaces' primaries and whites from
+`colorimetry.RGB_COLOURSPACES`. Licence: the package's (Apache-2.0). Created 2026-11-24 (sRGB
+earlier in the same release); `metadata["created_by"]` names the version.
 
 **Layout.** To keep the wheel small the float32 coefficients are stored *byte-shuffled* (the
 four byte planes of every float one after another, `coeffs_planes` of shape (4, 3 res^3 3),
@@ -28,11 +33,10 @@ uint8) before zlib compression, which shrinks a table from 8.9 MB to about 6.7 M
 exact (a reshape and a view), and the sha256 in `metadata` (of the decoded `scale` and
 `coeffs`, as in `.npz` tables) is checked on load. `metadata` also records the fit settings,
 the residual distribution of the table points, the round-trip statistics measured when the
-file was made and, for every table but the older sRGB file, the same statistics split into
-the colours that a reflectance can have and those it cannot (`object_colour_scale`). The
-three wide-gamut files are written by `radiometria._io.write_npz_deterministic` (fixed zip
-timestamps, sorted members, no wall-clock value in `metadata`), so rebuilding them from the
-same table gives the same file sha256.
+file was made, split into the colours that a reflectance can have and those it cannot
+(`object_colour_scale`). The files are written by `radiometria._io.write_npz_deterministic`
+(fixed zip timestamps, sorted members, no wall-clock value in `metadata`), so rebuilding them
+from the same table gives the same file sha256.
 
 **Accuracy** (round trip RGB -> spectrum -> RGB, CIEDE2000, float64; over the colours of each
 cube that a reflectance can have, `_roundtrip.has_reflectance`; "out" is the fraction of the
@@ -41,7 +45,7 @@ random linear colours, max / mean):
 
 | space | out (grid / random) | grid max / mean | random max / mean |
 | --- | --- | --- | --- |
-| sRGB | 0 / 0 | - | 0.50 / 0.011 (whole cube) |
+| sRGB | 0 / 0 | 0.23 / 0.010 | 0.50 / 0.011 |
 | Display P3 | 0.52 % / 0.21 % | 1.77 / 0.014 | 4.78 / 0.017 |
 | Rec.2020 | 9.9 % / 8.2 % | 1.93 / 0.025 | 3.61 / 0.029 |
 | ACEScg | 14.7 % / 10.8 % | 2.88 / 0.032 | 6.36 / 0.042 |
@@ -76,10 +80,10 @@ PACKAGED_FILES = {
 }
 # sha256 of each packaged file's bytes (the table in the module docstring).
 PACKAGED_SHA256 = {
-    "srgb_64.npz": "5dc4c8793f11b6b6be35c3178f68be9200f7238350b7ea07e9ed3c648bbe8d3c",
-    "display_p3_64.npz": "4d0f582612934ab9f9a1234325fc382f867bfd56faf316193927b8c6131f4ff6",
-    "rec2020_64.npz": "326911a51d3e46f98725fabe277c4db76a9d78f1bc26920204a39579778a0c07",
-    "acescg_64.npz": "dc9dc7acb8d26698d8154eac3da68d1df93632b3a0b8cd11ac6d8a2921f14d8d",
+    "srgb_64.npz": "2f3641af6caa57174ce73a779838ed1baedec6ec0b39f1fcd8a365317f729bb8",
+    "display_p3_64.npz": "7b00952161c5feac057628bb19dc2319df381183f97dc0c88e89d0563c1af844",
+    "rec2020_64.npz": "7afdebaffbfaadb9e1f0f9718bec57bfe91264d65063226c9745a479881a988c",
+    "acescg_64.npz": "ac2e2a26754a66623c16543419aad7e092c0fc874c86a313eff5b732bc9f33ac",
 }
 
 

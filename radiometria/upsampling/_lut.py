@@ -23,7 +23,9 @@ iterations of eq. 2.27 (`_lm.py`) from the interpolated coefficients and, side b
 (0, 0, 0), keeping the better. Measured on 21 000-24 000 random colours a reflectance has per
 space: 32 iterations give max CIEDE2000 0.02-0.06, mean < 1e-4 (the interpolation alone:
 max 3.2-7.8, mean 0.04-0.08; the interpolated start alone stalls in a poor basin for a few
-colours, the start at 0 for others). Derivatives of refined coefficients come from the implicit
+colours, the start at 0 for others). Where the winner has an infrared tail, a tail-free fit of
+the same colour replaces it on the tail stage's rule (`_tails.py`, `_refine`). Derivatives of
+refined coefficients come from the implicit
 function theorem at the solution ($dc = J^{+}\, d\,\mathrm{Lab}_t$, exact where the colour is
 reproduced), not from unrolling the iterations. The sRGB table has no such cells and is looked
 up exactly as pbrt does.
@@ -47,7 +49,7 @@ from ._sigmoid_polynomial import (
     nm_to_normalised_coefficients,
     normalised_to_nm_coefficients,
 )
-from ._tails import TAIL_RATIO, TAIL_TOLERANCE, TAIL_WEIGHT, _penalised_lm
+from ._tails import _DEEP_RED, _DEEP_RED_Z, TAIL_RATIO, TAIL_TOLERANCE, TAIL_WEIGHT, _penalised_lm
 
 # Levenberg-Marquardt iterations of each of a refined lookup's two starts (module docstring):
 # 16 left max CIEDE2000 0.36-0.47 on Rec.2020 and ACEScg, 32 gives 0.02-0.06.
@@ -237,9 +239,13 @@ def _refine(lut: RGBToSpectrumLUT, rgb: Array, c_nm: Array) -> Array:
     """Finish a lookup with the fit of eq. 2.27 (module docstring, "Refined lookups").
 
     Two Levenberg-Marquardt runs of `lut.refine_steps` iterations, from the interpolated
-    coefficients and from (0, 0, 0); the one with the lower residual wins. The iterations are
-    detached; the derivative in `rgb` is the implicit function theorem's, $J^{+}$ times the
-    derivative of the target's CIELAB, carried by a step that is zero in value.
+    coefficients and from (0, 0, 0); the one with the lower residual wins. Where that fit has
+    an infrared tail (`_tails.py`, pbrt-v4 #82), two runs with the tail hinge (from the
+    interpolated coefficients and from the tail-free deep red) offer a tail-free fit, taken
+    if it keeps the colour within `TAIL_TOLERANCE`: the rule of the table's tail stage. The
+    iterations are detached; the derivative in `rgb` is the implicit function theorem's,
+    $J^{+}$ times the derivative of the target's CIELAB, carried by a step that is zero in
+    value.
     """
     dtype = rgb.dtype
     m = ModelArrays.build(forward_model(lut.colourspace), dtype)
@@ -248,9 +254,13 @@ def _refine(lut: RGBToSpectrumLUT, rgb: Array, c_nm: Array) -> Array:
     start = sg(nm_to_normalised_coefficients(c_nm))
     start = jnp.where(jnp.isfinite(start), start, 0.0)
     # Four runs in one batch (rows are independent, one compiled copy of the iteration): both
-    # starts on eq. 2.27 alone and both on eq. 2.27 with the infrared-tail hinge (`_tails.py`).
+    # starts on eq. 2.27 alone, and on eq. 2.27 with the infrared-tail hinge (`_tails.py`) the
+    # interpolated start and the tail-free deep red scaled to the colour's brightness.
     k = start.shape[0]
-    starts = jnp.concatenate([start, jnp.zeros_like(start)] * 2)
+    z = jnp.max(sg(rgb), axis=-1)
+    z = jnp.clip(z, 1e-12, 1e-2)
+    deep_red = jnp.asarray(_DEEP_RED, dtype)[None, :] * jnp.sqrt(_DEEP_RED_Z / z)[:, None]
+    starts = jnp.concatenate([start, jnp.zeros_like(start), start, deep_red])
     lab4 = jnp.concatenate([sg(lab_t)] * 4)
     weight = jnp.repeat(jnp.asarray([0.0, TAIL_WEIGHT], dtype), 2 * k)
     bound = jnp.asarray(np.log(TAIL_RATIO), dtype)

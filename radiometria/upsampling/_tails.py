@@ -17,20 +17,33 @@ sigmoid of the polynomial's maxima, and $\ln q$ has the closed-form gradient
 $(s'/s)(x_t)\,\partial x_t/\partial c - (s'/s)(x_v)\,\partial x_v/\partial c$ at the two
 maximising wavelengths (a subgradient where a maximum is shared).
 
-**The stage** (`suppress_infrared_tails`, stage 4 of `fit_lut`). Every entry with
-$q > $ `tail_ratio` is fitted again with eq. 2.27 plus one residual more,
-$w \max(0, \ln q - \ln T)$ (a hinge on the log tail ratio, zero for every spectrum without a
-tail, so a tail-free exact solution has cost 0), by the same Levenberg-Marquardt iteration
-(`_lm.py`), from three starts: the entry itself, the entry one brightness node up (already
-processed: the stage walks down from the top, so a tail-free solution is continued downwards
-as the fit's sweep continues its solutions), and a bump of the entry's brightness centred
-where its own spectrum peaks in the visible. The refit replaces the entry only where it
-reproduces the colour within the fit's tolerance with $q \le T$; entries whose colours only
-tail-rising spectra reach (bright saturated reds whose reflectance rises past 730 nm) are
-kept, and counted.
+**Why not every tail can go.** The sigmoid polynomial of `Jakob2019` has three parameters,
+and in the dark its spectra are $s(x) \approx 1/(4x^2)$: bumps with algebraic flanks. A bump
+centred in the visible red leaks into the green and blue through those flanks, so the family
+makes a dark, saturated red only with a bump whose peak lies past 730 nm and whose blue-ward
+flank carries the colour (sRGB's red primary at brightness 1e-4: peak at 744 nm, q = 2 at
+0.0005 $\Delta E^*_{ab}$), or with the rising edge. For some colours even the best tail-free
+member misses the colour (pbrt's (1.07e-4, 0, 1.05e-5): 0.010-0.014 $\Delta E^*_{ab}$ at
+q <= 2, found by this module's fit from several starts), so removing a tail can cost colour
+accuracy, and the stage trades at most `TAIL_TOLERANCE` = 0.05 $\Delta E^*_{ab}$ (a
+twentieth of a just-noticeable difference) for it.
 
-References: pbrt-v4 issue #82 ("RGBAlbedoSpectrum of near-black colours has a large
-infrared tail"); `Jakob2019` (the sigmoid polynomial and its table); `Marquardt1963`.
+**The stage** (`suppress_infrared_tails`, stage 4 of `fit_lut`). Every entry with
+$q > $ `TAIL_RATIO` is fitted again with eq. 2.27 plus one residual more,
+$w \max(0, \ln q - \ln T)$ (a hinge on the log tail ratio: zero for every spectrum without a
+tail, so a tail-free exact solution has cost 0), by the Levenberg-Marquardt iteration of
+`_lm.py`, from four or five starts: the entry itself, a bump of its brightness where its
+spectrum peaks in the visible, the deep red above (`deep_red_start`), and the processed entry
+one brightness node down, as it is and scaled to this node's brightness with its shape kept.
+The walk goes up from the darkest node, so a tail-free solution is continued to brighter
+nodes as the fit's sweep continues its solutions. The refit replaces the entry where it keeps
+the colour within `TAIL_TOLERANCE`; elsewhere the entry is kept and counted (`report`):
+those are colours that only a spectrum with a tail reproduces that closely (mostly the
+brighter saturated reds, whose tails stay moderate: q < 10 above brightness 0.03 in sRGB).
+Lookups interpolate between nodes, and refined lookups (`_lut._refine`) make the same trade.
+
+Thesis: section 2.2.3 (eq. 2.27 and its table). References: pbrt-v4 issue #82 (the tail of
+near-black RGB albedos); `Jakob2019` (the sigmoid polynomial and its table); `Marquardt1963`.
 """
 
 import functools
@@ -165,6 +178,21 @@ def _bump_start(c: np.ndarray, m_lam: np.ndarray, vis: np.ndarray, z: float) -> 
     return np.stack([-a * np.ones_like(peak), 2 * a * peak, x0 - a * peak * peak], -1)
 
 
+# A tail-free reflectance of the darkest saturated reds (normalised coefficients): the
+# penalised fit's solution for sRGB's red primary at brightness 1e-4, a bump peaking at 744 nm
+# whose blue-ward flank carries the colour (`Jakob2019`'s family makes such reds no other way
+# without a tail). Dark spectra are s(x) ~ 1 / (4 x^2), so `deep_red_start(z)` scales it to
+# brightness z with its shape kept.
+_DEEP_RED = np.array([-1050.0, 1713.0, -700.0])
+_DEEP_RED_Z = 1e-4
+
+
+def deep_red_start(z) -> np.ndarray:
+    """`_DEEP_RED` scaled to brightness `z` (..., ) -> (..., 3) (see above)."""
+    z = np.clip(np.asarray(z, np.float64), 1e-12, 1e-2)
+    return _DEEP_RED * np.sqrt(_DEEP_RED_Z / z)[..., None]
+
+
 def tail_ratios(coeffs_nm: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
     """q of nm coefficients (..., 3) on the forward model's grid (float64, NumPy)."""
     with jax.enable_x64(True):
@@ -242,7 +270,11 @@ def suppress_infrared_tails(
             cand = np.flatnonzero((q > log_bound) & ~grey)
             if cand.size:
                 n_tail += cand.size
-                starts = [own[cand], _bump_start(own[cand], lam, vis, scale[k])]
+                starts = [
+                    own[cand],
+                    _bump_start(own[cand], lam, vis, scale[k]),
+                    np.broadcast_to(deep_red_start(scale[k]), own[cand].shape),
+                ]
                 if below is not None:
                     # Dark spectra are s(x) ~ 1 / (4 x^2): the node below, scaled to this
                     # brightness with its shape kept, is c * sqrt(z_below / z).

@@ -56,8 +56,11 @@ def test_fit_lut_tail_stage():
     report = fit.settings["infrared_tails"]
     new, old = np.asarray(fit.lut.coeffs, np.float64), np.asarray(plain.lut.coeffs, np.float64)
     changed = np.any(new != old, axis=-1)
-    tail_free = np.asarray(fit.tail_free)
+    tail_free = np.array(fit.tail_free)
     assert report["replaced"] > 0 and np.array_equal(changed, tail_free)
+    # Row 0 (black) holds a copy of row 1 (`fit_lut`'s explicit ends): check the nodes k >= 1.
+    np.testing.assert_array_equal(new[:, 0], new[:, 1])
+    tail_free[:, 0] = False
     assert report["entries_with_tail"] == report["replaced"] + report["kept"]
     model = up.forward_model("sRGB")
     wl = np.asarray(model.wavelengths_nm)

@@ -39,7 +39,10 @@ def test_packaged_files_match_their_provenance():
         assert coeffs.shape == (3, 64, 64, 64, 3) and coeffs.dtype == np.float32
         np.testing.assert_allclose(scale, up.brightness_scale(64), rtol=1e-6, atol=1e-12)
         s = meta["fit_summary"]
-        assert s["converged"] + s["out_of_reach"] + s["not_converged"] == s["entries"]
+        n = s["converged"] + s["out_of_reach"] + s["not_converged"] + s["tail_free"]
+        assert n == s["entries"]
+        tails = meta["fit"]["infrared_tails"]  # the tail stage ran (`_tails.py`)
+        assert 0 < tails["replaced"] <= tails["entries_with_tail"]
         assert s["residual_max_converged"] <= s["tolerance"]
         assert meta["fit"]["wavelength_step_nm"] == 1.0
         if space == "sRGB":
