@@ -32,7 +32,6 @@ from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from jaxtyping import Array, Float
 
 from .._checks import check_positive_int
-from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._forward import forward_model
 from ._lm import (
     DEFAULT_TOLERANCE,
@@ -45,7 +44,8 @@ from ._lm import (
     residual_and_jacobian,
     target_Lab,
 )
-from ._lut import REFINE_STEPS, RGBToSpectrumLUT, brightness_scale
+from ._lut import REFINE_STEPS, RGBToSpectrumLUT, brightness_scale, column_directions
+from ._sigmoid_polynomial import _normalised_to_nm_np
 from ._tails import suppress_infrared_tails
 
 WHITE_C2 = 2048.0  # c2 of the white node (module docstring)
@@ -161,14 +161,6 @@ def _results_array(code: np.ndarray) -> RESULTS:
     return jax.tree_util.tree_map(lambda v: jnp.asarray(values, v.dtype), items[0])
 
 
-def _normalised_to_nm_np(c: np.ndarray) -> np.ndarray:
-    """NumPy twin of `normalised_to_nm_coefficients` (host-side post-processing)."""
-    a = VISIBLE_WAVELENGTH_MIN_NM
-    b = 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
-    A, B, C = c[..., 0], c[..., 1], c[..., 2]
-    return np.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
-
-
 def _stationary(c: np.ndarray, targets: np.ndarray, m: ModelArrays, threshold: float = 1e-2):
     """True where the least-squares gradient J^T r is negligible: |J^T r| <= t |J|_F |r|."""
     if c.shape[0] == 0:
@@ -187,18 +179,6 @@ def _stationary(c: np.ndarray, targets: np.ndarray, m: ModelArrays, threshold: f
 @jax.jit
 def _rj_jit(c, rgb, m):
     return residual_and_jacobian(c, target_Lab(rgb, m), m, 512)
-
-
-def _column_directions(resolution: int, dtype) -> np.ndarray:
-    """Unit-brightness RGB of every column (3 res res, 3): e[l] = 1, e[l+1] = x, e[l+2] = y."""
-    t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
-    j, i = np.meshgrid(np.arange(resolution), np.arange(resolution), indexing="ij")
-    e = np.zeros((3, resolution, resolution, 3))
-    for ch in range(3):
-        e[ch, :, :, ch] = 1.0
-        e[ch, :, :, (ch + 1) % 3] = t[i]
-        e[ch, :, :, (ch + 2) % 3] = t[j]
-    return e.reshape(-1, 3).astype(dtype)
 
 
 class _Schedule(eqx.Module):
@@ -498,7 +478,7 @@ def fit_lut(
     m = ModelArrays.build(model, dtype)
     scale_np = brightness_scale(res)
     k0 = max(1, res // 5)
-    e_np = _column_directions(res, np.float64)
+    e_np = column_directions(res, np.float64)
     n_cols = e_np.shape[0]
     n_dev = 1 if devices is None else len(devices)
     chunk = min(check_positive_int(chunk, "chunk"), -(-n_cols // n_dev))

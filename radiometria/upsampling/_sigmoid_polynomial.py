@@ -242,3 +242,19 @@ class SigmoidPolynomialSpectrum(AbstractSpectrum):
         lam = jnp.stack([lo, hi, vertex], -1)
         x = (c[..., 0:1] * lam + c[..., 1:2]) * lam + c[..., 2:3]
         return _sigmoid(jnp.max(x, axis=-1))
+
+
+def _normalised_to_nm_np(c: np.ndarray) -> np.ndarray:
+    """NumPy twin of `normalised_to_nm_coefficients` (host-side post-processing)."""
+    a = VISIBLE_WAVELENGTH_MIN_NM
+    b = 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
+    A, B, C = c[..., 0], c[..., 1], c[..., 2]
+    return np.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
+
+
+def _nm_to_normalised_np(c: np.ndarray) -> np.ndarray:
+    """NumPy twin of `nm_to_normalised_coefficients` (host-side, float64 without x64)."""
+    a = VISIBLE_WAVELENGTH_MIN_NM
+    w = VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM
+    A, B, C = c[..., 0], c[..., 1], c[..., 2]
+    return np.stack([A * w * w, (B + 2.0 * A * a) * w, C + B * a + A * a * a], -1)

@@ -58,14 +58,14 @@ from jaxtyping import Array
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._forward import forward_model
 from ._lm import ModelArrays, _lm_direction, residual_and_jacobian, target_Lab
-from ._sigmoid_polynomial import _sigmoid
+from ._lut import column_directions
+from ._sigmoid_polynomial import _nm_to_normalised_np, _normalised_to_nm_np, _sigmoid
 
 TAIL_START_NM = 730.0  # above it the CIE 1931 CMFs are below 0.2 % of their peaks
 TAIL_RATIO = 2.0  # the stage's bound on q at the table's nodes (lookups interpolate between)
 TAIL_WEIGHT = 10.0  # w: Delta E*ab per unit of ln q above the bound
-TAIL_STEPS = 200
+TAIL_STEPS = 200  # Levenberg-Marquardt iterations per start
 TAIL_TOLERANCE = 0.05  # Delta E*ab a tail-free refit may trade (1/20 of a JND)
-_DEBUG = True  # Levenberg-Marquardt iterations per start
 
 
 def _tail_mask(m: ModelArrays) -> Array:
@@ -139,33 +139,6 @@ def _penalised_lm(c0, lab_t, m, log_bound, weight, n_steps: int):
 
     c, r, J, cost, mu = lax.fori_loop(0, n_steps, body, (c0, r, J, cost, mu))
     return c, jnp.linalg.norm(r[:, :3], axis=-1), log_tail_ratio(c, m)[0], cost
-
-
-def _nm_to_normalised_np(c: np.ndarray) -> np.ndarray:
-    """NumPy inverse of `_fit_lut._normalised_to_nm_np` (float64)."""
-    a = VISIBLE_WAVELENGTH_MIN_NM
-    w = VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM
-    A, B, C = c[..., 0], c[..., 1], c[..., 2]
-    return np.stack([A * w * w, (B + 2.0 * A * a) * w, C + B * a + A * a * a], -1)
-
-
-def _normalised_to_nm_np(c: np.ndarray) -> np.ndarray:
-    a = VISIBLE_WAVELENGTH_MIN_NM
-    b = 1.0 / (VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM)
-    A, B, C = c[..., 0], c[..., 1], c[..., 2]
-    return np.stack([A * b * b, B * b - 2.0 * A * a * b * b, C - B * a * b + A * (a * b) ** 2], -1)
-
-
-def _level_rgb(res: int, z: float) -> np.ndarray:
-    """Target RGB of the entries (l, j, i) of one brightness node, (3 res res, 3)."""
-    t = np.arange(res) / (res - 1)
-    j, i = np.meshgrid(np.arange(res), np.arange(res), indexing="ij")
-    rgb = np.zeros((3, res, res, 3))
-    for ch in range(3):
-        rgb[ch, :, :, ch] = z
-        rgb[ch, :, :, (ch + 1) % 3] = t[i] * z
-        rgb[ch, :, :, (ch + 2) % 3] = t[j] * z
-    return rgb.reshape(-1, 3)
 
 
 def _bump_start(c: np.ndarray, m_lam: np.ndarray, vis: np.ndarray, z: float) -> np.ndarray:
@@ -280,7 +253,12 @@ def suppress_infrared_tails(
                     # brightness with its shape kept, is c * sqrt(z_below / z).
                     starts += [below[cand], below[cand] * np.sqrt(scale[k - 1] / scale[k])]
                 c, de, qn = _best_of_starts(
-                    starts, _level_rgb(res, scale[k])[cand], m, log_bound, weight, n_steps
+                    starts,
+                    (column_directions(res, np.float64) * scale[k])[cand],
+                    m,
+                    log_bound,
+                    weight,
+                    n_steps,
                 )
                 new_nm = _normalised_to_nm_np(c)
                 with np.errstate(over="ignore", invalid="ignore"):
