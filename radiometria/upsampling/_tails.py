@@ -46,6 +46,7 @@ Thesis: section 2.2.3 (eq. 2.27 and its table). References: pbrt-v4 issue #82 (t
 near-black RGB albedos); `Jakob2019` (the sigmoid polynomial and its table); `Marquardt1963`.
 """
 
+import contextlib
 import functools
 from typing import NamedTuple
 
@@ -64,7 +65,7 @@ from ._sigmoid_polynomial import _nm_to_normalised_np, _normalised_to_nm_np, _si
 TAIL_START_NM = 730.0  # above it the CIE 1931 CMFs are below 0.2 % of their peaks
 TAIL_RATIO = 2.0  # the stage's bound on q at the table's nodes (lookups interpolate between)
 TAIL_WEIGHT = 10.0  # w: Delta E*ab per unit of ln q above the bound
-TAIL_STEPS = 200  # Levenberg-Marquardt iterations per start
+TAIL_STEPS = 16  # Levenberg-Marquardt iterations per start (200 replace 2 % more entries)
 TAIL_TOLERANCE = 0.05  # Delta E*ab a tail-free refit may trade (1/20 of a JND)
 
 
@@ -171,8 +172,7 @@ def tail_ratios(coeffs_nm: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
     with jax.enable_x64(True):
         m = ModelArrays.build(forward_model(colourspace), jnp.float64)
         c = _nm_to_normalised_np(np.asarray(coeffs_nm, np.float64).reshape(-1, 3))
-        q, _ = log_tail_ratio(jnp.asarray(c), m)
-        return np.exp(np.asarray(q)).reshape(np.shape(coeffs_nm)[:-1])
+        return np.exp(_chunked(_log_q, c, m)).reshape(np.shape(coeffs_nm)[:-1])
 
 
 class TailStage(NamedTuple):
@@ -207,7 +207,7 @@ def suppress_infrared_tails(
     - `tolerance`: the colour error $\Delta E^*_{ab}$ a tail-free refit may have and still
         replace the entry. [-]
     - `n_steps`, `weight`: Levenberg-Marquardt iterations per start and the hinge's weight w.
-    - `progress`: optional `progress("tails", done, total)` per brightness node.
+    - `progress`: optional `progress("tails", done, total)` per chunk of entries.
 
     **Returns:**
 
@@ -231,52 +231,49 @@ def suppress_infrared_tails(
     grey = np.zeros((3, res, res), bool)
     grey[:, res - 1, res - 1] = True
     grey = grey.reshape(-1)
-    n_tail = 0
+    # The table's own precision (float32 for the packaged tables, as the fit).
+    dtype = np.dtype(np.float64 if coeffs_nm.dtype == np.float64 else np.float32)
+    # Which entries have a tail, and whether a refit keeps the colour, is decided in float64
+    # on the coefficients as stored; the search runs in the table's own precision (float32
+    # for the packaged tables, as the fit: about twice as fast).
     with jax.enable_x64(True):
-        m = ModelArrays.build(forward_model(colourspace), jnp.float64)
-        lam = np.asarray(m.lam)
-        vis = ~np.asarray(_tail_mask(m))
-        below = None  # the processed node k - 1, normalised
-        for k in range(1, res):
-            own = _nm_to_normalised_np(out[:, k].reshape(-1, 3).astype(np.float64))
-            q = np.asarray(log_tail_ratio(jnp.asarray(own), m)[0])
-            cand = np.flatnonzero((q > log_bound) & ~grey)
-            if cand.size:
-                n_tail += cand.size
-                starts = [
-                    own[cand],
-                    _bump_start(own[cand], lam, vis, scale[k]),
-                    np.broadcast_to(deep_red_start(scale[k]), own[cand].shape),
-                ]
-                if below is not None:
-                    # Dark spectra are s(x) ~ 1 / (4 x^2): the node below, scaled to this
-                    # brightness with its shape kept, is c * sqrt(z_below / z).
-                    starts += [below[cand], below[cand] * np.sqrt(scale[k - 1] / scale[k])]
-                c, de, qn = _best_of_starts(
-                    starts,
-                    (column_directions(res, np.float64) * scale[k])[cand],
-                    m,
-                    log_bound,
-                    weight,
-                    n_steps,
-                )
-                new_nm = _normalised_to_nm_np(c)
-                with np.errstate(over="ignore", invalid="ignore"):
-                    finite = np.all(np.isfinite(new_nm.astype(out.dtype)), -1)
-                ok = (de <= tolerance) & (qn <= log_bound + 1e-3) & finite
-                idx = cand[ok]
-                l_, j_, i_ = np.unravel_index(idx, (3, res, res))
-                out[l_, k, j_, i_] = new_nm[ok].astype(out.dtype)
-                replaced[l_, k, j_, i_] = True
-                residual[l_, k, j_, i_] = de[ok]
-                own[idx] = c[ok]
-            below = own
-            if progress is not None:
-                progress("tails", k, res - 1)
-        out[:, 0] = out[:, 1]
-        replaced[:, 0], residual[:, 0] = replaced[:, 1], residual[:, 1]
-        q_left = tail_ratios(out[:, 1:], colourspace)
-        q_left[:, :, res - 1, res - 1] = 0.0  # greys: exactly flat
+        m64 = ModelArrays.build(forward_model(colourspace), jnp.float64)
+        lam = np.asarray(m64.lam)
+        vis = ~np.asarray(_tail_mask(m64))
+        # Every node k >= 1 at once: (k, l, j, i) flattened, the grey column left out.
+        nodes = np.moveaxis(out[:, 1:], 1, 0).reshape(res - 1, -1, 3)
+        own = _nm_to_normalised_np(nodes.reshape(-1, 3).astype(np.float64))
+        q = _chunked(_log_q, own, m64)
+    grey_all = np.tile(grey, res - 1)
+    cand = np.flatnonzero((q > log_bound) & ~grey_all)
+    k_c = cand // (3 * res * res) + 1
+    z = scale[k_c]
+    rgb = column_directions(res, np.float64)[cand % (3 * res * res)] * z[:, None]
+    starts = [own[cand], _bump_start(own[cand], lam, vis, z), deep_red_start(z)]
+    with jax.enable_x64(True) if dtype == np.float64 else contextlib.nullcontext():
+        m = ModelArrays.build(forward_model(colourspace), dtype)
+        c = _best_of_starts(starts, rgb, m, log_bound, weight, n_steps, progress)
+    with np.errstate(over="ignore", invalid="ignore"):
+        new_nm = _normalised_to_nm_np(c).astype(out.dtype)
+    finite = np.all(np.isfinite(new_nm), -1)
+    new_nm[~finite] = 0.0
+    with jax.enable_x64(True):
+        stored = _nm_to_normalised_np(new_nm.astype(np.float64))
+        de = _chunked(_colour_error, np.concatenate([stored, rgb], -1), m64)
+        qn = _chunked(_log_q, stored, m64)
+    ok = (de <= tolerance) & (qn <= log_bound + 1e-3) & finite
+    kk, rest = np.divmod(cand[ok], 3 * res * res)
+    l_, j_, i_ = np.unravel_index(rest, (3, res, res))
+    out[l_, kk + 1, j_, i_] = new_nm[ok]
+    replaced[l_, kk + 1, j_, i_] = True
+    residual[l_, kk + 1, j_, i_] = de[ok]
+    out[:, 0] = out[:, 1]
+    replaced[:, 0], residual[:, 0] = replaced[:, 1], residual[:, 1]
+    n_tail = int(cand.size)
+    left = np.ones(q.shape, bool)
+    left[cand[ok]] = False
+    left &= ~grey_all  # greys are exactly flat
+    q_left = float(np.exp(q[left].max())) if left.any() else 1.0
     report = {
         "tail_start_nm": TAIL_START_NM,
         "tail_ratio_bound": float(tail_ratio),
@@ -285,23 +282,58 @@ def suppress_infrared_tails(
         "replaced": int(replaced[:, 1:].sum()),
         "kept": int(n_tail - replaced[:, 1:].sum()),
         "residual_max_replaced": float(residual.max()),
-        "max_tail_ratio_left": float(q_left.max()),
+        "max_tail_ratio_left": q_left,
     }
     return TailStage(out, replaced, residual, report)
 
 
-def _best_of_starts(starts, rgb, m, log_bound, weight, n_steps):
-    """The penalised fit from every start (one batch, padded to a power of two to bound
-    recompilation); per entry the run of lowest penalised cost: (c, Delta E*ab, ln q)."""
+_CHUNK = 2048  # entries per compiled call (x the number of starts): one program for any table
+
+
+def _pad_rows(x: np.ndarray, size: int, value: float = 0.0) -> np.ndarray:
+    return np.pad(x, ((0, size - x.shape[0]), (0, 0)), constant_values=value)
+
+
+@jax.jit
+def _log_q(c, m):
+    return log_tail_ratio(c, m)[0]
+
+
+@jax.jit
+def _colour_error(c_rgb, m):
+    """Delta E*ab of normalised coefficients `c_rgb[:, :3]` against linear RGB `c_rgb[:, 3:]`."""
+    r, _ = residual_and_jacobian(c_rgb[:, :3], target_Lab(c_rgb[:, 3:], m), m)
+    return jnp.linalg.norm(r, axis=-1)
+
+
+def _chunked(fn, c: np.ndarray, m: ModelArrays, size: int = 8 * _CHUNK) -> np.ndarray:
+    """`fn(rows, m)` over the rows of `c` in padded chunks of `size` (one compiled shape)."""
+    out = []
+    for a in range(0, c.shape[0], size):
+        part = c[a : a + size]
+        rows = jnp.asarray(_pad_rows(part, size), m.lam.dtype)
+        out.append(np.asarray(fn(rows, m), np.float64)[: part.shape[0]])
+    return np.concatenate(out) if out else np.zeros((0,))
+
+
+def _best_of_starts(starts, rgb, m, log_bound, weight, n_steps, progress=None):
+    """The penalised fit from every start, in chunks of `_CHUNK` entries (all starts of an
+    entry in one batch); per entry the coefficients of the run of lowest penalised cost."""
     n, ns = rgb.shape[0], len(starts)
-    size = 1 << int(np.ceil(np.log2(max(n, 64))))
-    pad = lambda a, v=0.0: np.pad(a, ((0, size - n), (0, 0)), constant_values=v)  # noqa: E731
-    c0 = jnp.asarray(np.concatenate([pad(s) for s in starts]))
-    lab_t = target_Lab(jnp.asarray(np.tile(pad(rgb, 0.5), (ns, 1))), m)
-    c, de, qn, cost = _penalised_lm(c0, lab_t, m, log_bound, weight, n_steps)
-    c, de, qn, cost = (
-        np.asarray(a).reshape((ns, size) + a.shape[1:])[:, :n] for a in (c, de, qn, cost)
-    )
-    best = np.argmin(np.where(np.isfinite(cost), cost, np.inf), axis=0)
-    take = lambda a: a[best, np.arange(n)]  # noqa: E731
-    return take(c), take(de), take(qn)
+    c_out = np.zeros((n, 3))
+    for a in range(0, n, _CHUNK):
+        b = min(n, a + _CHUNK)
+        dt = m.lam.dtype
+        c0 = jnp.asarray(np.concatenate([_pad_rows(s[a:b], _CHUNK) for s in starts]), dt)
+        lab_t = target_Lab(jnp.asarray(np.tile(_pad_rows(rgb[a:b], _CHUNK, 0.5), (ns, 1)), dt), m)
+        c, _, _, cost = _penalised_lm(c0, lab_t, m, log_bound, weight, n_steps)
+        c, cost = (
+            np.asarray(x, np.float64).reshape((ns, _CHUNK) + x.shape[1:])[:, : b - a]
+            for x in (c, cost)
+        )
+        best = np.argmin(np.where(np.isfinite(cost), cost, np.inf), axis=0)
+        rows = np.arange(b - a)
+        c_out[a:b] = c[best, rows]
+        if progress is not None:
+            progress("tails", b, n)
+    return c_out
