@@ -5,7 +5,9 @@
 Reports, as JSON on stdout:
 
 - `fit_lut`: wall time of the first build in this process (compilation included), of a second
-  build (compiled code cached: the steady-state cost), the peak resident memory of the
+  build (compiled code cached: the steady-state cost) and of one without the infrared-tail
+  stage (`infrared_tails=False`, the table pbrt's `rgb2spec_opt` makes), the stage's report,
+  the peak resident memory of the
   process, the convergence summary (every table point, its residual distribution) and, with
   `--check`, the round-trip CIEDE2000 statistics;
 - `colour_LUT3D_Jakob2019`: wall time of `colour.recovery.LUT3D_Jakob2019.generate` at a small
@@ -51,12 +53,18 @@ def bench_fit_lut(res: int, n_devices: int, check: bool) -> dict:
     second = fit_lut("sRGB", res, devices=devices)
     t_second = time.perf_counter() - t0
     cpu_second = time.process_time() - c0
+    # The same fit without stage (4), the infrared-tail refit (pbrt's colour-only table).
+    t0 = time.perf_counter()
+    fit_lut("sRGB", res, devices=devices, infrared_tails=False)
+    t_no_tails = time.perf_counter() - t0
     out = {
         "resolution": res,
         "devices": len(jax.devices()),
         "cpu_count": os.cpu_count(),
         "wall_s_first_call_incl_compile": round(t_first, 3),
         "wall_s_second_call": round(t_second, 3),
+        "wall_s_second_call_without_tail_stage": round(t_no_tails, 3),
+        "infrared_tails": second.settings["infrared_tails"],
         "cpu_s_first_call": round(cpu_first, 3),
         "cpu_s_second_call": round(cpu_second, 3),
         "peak_rss_mb": round(_peak_rss_mb(), 1),

@@ -3,13 +3,13 @@ r"""The packaged coefficient tables (sRGB, Display P3, Rec.2020, ACEScg) and `ge
 **Files.** `data/` holds one res-64 float32 table per colour space that pbrt-v4 also ships:
 
 - sRGB: `srgb_64.npz`, sha256
-  `2f3641af6caa57174ce73a779838ed1baedec6ec0b39f1fcd8a365317f729bb8`;
+  `e624c0b2506ba971ad50fa06ae6eb6e649aeec17bac5212d6aef431668ded58c`;
 - Display P3: `display_p3_64.npz`, sha256
-  `7b00952161c5feac057628bb19dc2319df381183f97dc0c88e89d0563c1af844`;
+  `75671e12e5b238609eeb7fada437f4e38cdfe748a630d21c52465fad356e4aa9`;
 - ITU-R BT.2020 (Rec.2020): `rec2020_64.npz`, sha256
-  `7afdebaffbfaadb9e1f0f9718bec57bfe91264d65063226c9745a479881a988c`;
+  `982aecaabc4d8f64315f6d0728f0ae2f44769bc9ffd9b85c21e7b0f107379edb`;
 - ACEScg: `acescg_64.npz`, sha256
-  `ac2e2a26754a66623c16543419aad7e092c0fc874c86a313eff5b732bc9f33ac`.
+  `d362e020078c00b4b38d64d373cc26ba5ba820f6f37343b929b92131c5c8ce1a`.
 
 (`PACKAGED_SHA256` holds the same values; `tests/upsampling/test_wide_gamut.py` checks them.)
 
@@ -18,8 +18,8 @@ float32), regenerated with `python -m radiometria.upsampling._make_data [SPACE .
 third-party table is copied. The fit's last stage, the infrared-tail refit (`_tails.py`,
 pbrt-v4 #82), was added after the tables were first fitted and was run on them with
 `_make_data --tails-only` (the stage reads only the finished table, so this is the table
-`fit_lut` gives); it replaced 12 699 (sRGB), 12 015 (Display P3), 11 589 (Rec.2020) and
-11 243 (ACEScg) entries, and its report is in `metadata["fit"]["infrared_tails"]`. Inputs:
+`fit_lut` gives); it replaced 12 212 (sRGB), 11 554 (Display P3), 11 076 (Rec.2020) and
+10 732 (ACEScg) entries, and its report is in `metadata["fit"]["infrared_tails"]`. Inputs:
 the CIE 1931 2° colour-matching functions and the CIE illuminants D65 (sRGB, Display P3,
 Rec.2020) and CIE daylight at 6000 K x 1.4388/1.4380 (ACEScg's ACES white, as pbrt), from
 `radiometria.colorimetry`'s packaged CIE tables (see `colorimetry/_data.py` for their source,
@@ -80,10 +80,10 @@ PACKAGED_FILES = {
 }
 # sha256 of each packaged file's bytes (the table in the module docstring).
 PACKAGED_SHA256 = {
-    "srgb_64.npz": "2f3641af6caa57174ce73a779838ed1baedec6ec0b39f1fcd8a365317f729bb8",
-    "display_p3_64.npz": "7b00952161c5feac057628bb19dc2319df381183f97dc0c88e89d0563c1af844",
-    "rec2020_64.npz": "7afdebaffbfaadb9e1f0f9718bec57bfe91264d65063226c9745a479881a988c",
-    "acescg_64.npz": "ac2e2a26754a66623c16543419aad7e092c0fc874c86a313eff5b732bc9f33ac",
+    "srgb_64.npz": "e624c0b2506ba971ad50fa06ae6eb6e649aeec17bac5212d6aef431668ded58c",
+    "display_p3_64.npz": "75671e12e5b238609eeb7fada437f4e38cdfe748a630d21c52465fad356e4aa9",
+    "rec2020_64.npz": "982aecaabc4d8f64315f6d0728f0ae2f44769bc9ffd9b85c21e7b0f107379edb",
+    "acescg_64.npz": "d362e020078c00b4b38d64d373cc26ba5ba820f6f37343b929b92131c5c8ce1a",
 }
 
 

@@ -11,11 +11,12 @@ into a reflectance near 1 above 760 nm, and radiometria's tables reproduced it (
 830 nm, where such a "dark" surface reflects as a white one would (and a medium whose
 coefficients are upsampled from it is transparent there).
 
-**Tail ratio.** $q(c) = \max_{\lambda > 730} S(\lambda) / \max_{\lambda \le 730} S(\lambda)$
-on the forward model's wavelength grid. $S = s(x)$ with $s$ increasing, so both maxima are the
-sigmoid of the polynomial's maxima, and $\ln q$ has the closed-form gradient
+**Tail ratio.** $q(c) = \max_{730 \le \lambda \le 830} S(\lambda) /
+\max_{360 \le \lambda \le 730} S(\lambda)$. $S = s(x)$ with $s$ increasing and $x$ a quadratic,
+so each maximum is the sigmoid of the quadratic's maximum over the interval, at an end or at
+the vertex (closed form, no wavelength grid), and $\ln q$ has the closed-form gradient
 $(s'/s)(x_t)\,\partial x_t/\partial c - (s'/s)(x_v)\,\partial x_v/\partial c$ at the two
-maximising wavelengths (a subgradient where a maximum is shared).
+maximising wavelengths (envelope theorem; a subgradient where a maximum is shared).
 
 **Why not every tail can go.** The sigmoid polynomial of `Jakob2019` has three parameters,
 and in the dark its spectra are $s(x) \approx 1/(4x^2)$: bumps with algebraic flanks. A bump
@@ -32,15 +33,18 @@ twentieth of a just-noticeable difference) for it.
 $q > $ `TAIL_RATIO` is fitted again with eq. 2.27 plus one residual more,
 $w \max(0, \ln q - \ln T)$ (a hinge on the log tail ratio: zero for every spectrum without a
 tail, so a tail-free exact solution has cost 0), by the Levenberg-Marquardt iteration of
-`_lm.py`, from four or five starts: the entry itself, a bump of its brightness where its
-spectrum peaks in the visible, the deep red above (`deep_red_start`), and the processed entry
-one brightness node down, as it is and scaled to this node's brightness with its shape kept.
-The walk goes up from the darkest node, so a tail-free solution is continued to brighter
-nodes as the fit's sweep continues its solutions. The refit replaces the entry where it keeps
-the colour within `TAIL_TOLERANCE`; elsewhere the entry is kept and counted (`report`):
+`_lm.py` (`TAIL_STEPS` iterations), from three starts: the entry itself, a bump of its
+brightness where its spectrum peaks in the visible, and the deep red above scaled to its
+brightness (`deep_red_start`; dark spectra are $s(x) \approx 1/(4x^2)$, so scaling x by
+$\sqrt{z_0 / z}$ keeps the shape and scales the spectrum to brightness z). All entries of all
+nodes go through one compiled program in fixed-size chunks, in the table's own precision; which
+entries have a tail, and whether a refit keeps the colour, is decided in float64 on the
+coefficients as they are stored. The refit replaces the entry where it keeps the colour
+within `TAIL_TOLERANCE` with $q \le T$; elsewhere the entry is kept and counted (`report`):
 those are colours that only a spectrum with a tail reproduces that closely (mostly the
 brighter saturated reds, whose tails stay moderate: q < 10 above brightness 0.03 in sRGB).
 Lookups interpolate between nodes, and refined lookups (`_lut._refine`) make the same trade.
+Cost: 2.4 s for a res-64 table on 2 CPU cores, warm (the fit's stages 1-3: 1.2 s).
 
 Thesis: section 2.2.3 (eq. 2.27 and its table). References: pbrt-v4 issue #82 (the tail of
 near-black RGB albedos); `Jakob2019` (the sigmoid polynomial and its table); `Marquardt1963`.
@@ -69,11 +73,13 @@ TAIL_STEPS = 16  # Levenberg-Marquardt iterations per start (200 replace 2 % mor
 TAIL_TOLERANCE = 0.05  # Delta E*ab a tail-free refit may trade (1/20 of a JND)
 
 
+_T730 = (TAIL_START_NM - VISIBLE_WAVELENGTH_MIN_NM) / (
+    VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM
+)  # 730 nm on the normalised wavelength axis
+
+
 def _tail_mask(m: ModelArrays) -> Array:
-    t = (TAIL_START_NM - VISIBLE_WAVELENGTH_MIN_NM) / (
-        VISIBLE_WAVELENGTH_MAX_NM - VISIBLE_WAVELENGTH_MIN_NM
-    )
-    return m.lam > t
+    return m.lam > _T730
 
 
 def _log_s_and_slope(x: Array) -> tuple[Array, Array]:
@@ -86,20 +92,30 @@ def _log_s_and_slope(x: Array) -> tuple[Array, Array]:
     return log_s, 0.5 / (r * r * r) / s
 
 
-def log_tail_ratio(c: Array, m: ModelArrays) -> tuple[Array, Array]:
+def _interval_max(c: Array, lo: float, hi: float) -> tuple[Array, Array]:
+    """max of x = c0 l^2 + c1 l + c2 over l in [lo, hi] (normalised), and where: at an end or
+    at the vertex of a concave parabola (closed form, (n,) each)."""
+    a, b, c0 = c[:, 0], c[:, 1], c[:, 2]
+    x = lambda t: (a * t + b) * t + c0  # noqa: E731
+    x_lo, x_hi = x(lo), x(hi)
+    v = -b / (2.0 * jnp.where(a < 0, a, -1.0))
+    inside = (a < 0) & (v > lo) & (v < hi)
+    x_v = jnp.where(inside, x(jnp.where(inside, v, lo)), -jnp.inf)
+    at = jnp.where(x_v >= jnp.maximum(x_lo, x_hi), v, jnp.where(x_lo >= x_hi, lo, hi))
+    return jnp.maximum(jnp.maximum(x_lo, x_hi), x_v), at
+
+
+def log_tail_ratio(c: Array, m: ModelArrays | None = None) -> tuple[Array, Array]:
     r"""$\ln q$ (n,) and its gradient in the normalised coefficients `c` (n, 3) (module
-    docstring)."""
-    tail = _tail_mask(m)
-    lam = m.lam[None, :]
-    x = (c[:, 0:1] * lam + c[:, 1:2]) * lam + c[:, 2:3]  # (n, L)
-    it = jnp.argmax(jnp.where(tail[None, :], x, -jnp.inf), axis=-1)
-    iv = jnp.argmax(jnp.where(tail[None, :], -jnp.inf, x), axis=-1)
-    xt = jnp.take_along_axis(x, it[:, None], 1)[:, 0]
-    xv = jnp.take_along_axis(x, iv[:, None], 1)[:, 0]
+    docstring). `m` is not needed (the maxima are in closed form); accepted for symmetry with
+    the residual functions."""
+    xt, lt_at = _interval_max(c, _T730, 1.0)
+    xv, lv_at = _interval_max(c, 0.0, _T730)
     lt, gt = _log_s_and_slope(xt)
     lv, gv = _log_s_and_slope(xv)
-    basis = lambda lam: jnp.stack([lam * lam, lam, jnp.ones_like(lam)], -1)  # noqa: E731
-    grad = gt[:, None] * basis(m.lam[it]) - gv[:, None] * basis(m.lam[iv])
+    basis = lambda t: jnp.stack([t * t, t, jnp.ones_like(t)], -1)  # noqa: E731
+    # Envelope theorem: at an interior maximum dx/dl = 0, so only c moves the maximum.
+    grad = gt[:, None] * basis(lt_at) - gv[:, None] * basis(lv_at)
     return lt - lv, grad
 
 
@@ -142,8 +158,9 @@ def _penalised_lm(c0, lab_t, m, log_bound, weight, n_steps: int):
     return c, jnp.linalg.norm(r[:, :3], axis=-1), log_tail_ratio(c, m)[0], cost
 
 
-def _bump_start(c: np.ndarray, m_lam: np.ndarray, vis: np.ndarray, z: float) -> np.ndarray:
-    """A concave parabola of peak value s^-1(z) at the visible argmax of each spectrum `c`."""
+def _bump_start(c: np.ndarray, m_lam: np.ndarray, vis: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """A concave parabola of peak value s^-1(z) (brightness z, (n,)) at the visible argmax of
+    each spectrum `c` (n, 3)."""
     x = (c[:, 0:1] * m_lam + c[:, 1:2]) * m_lam + c[:, 2:3]
     peak = m_lam[np.argmax(np.where(vis, x, -np.inf), axis=1)]
     peak = np.clip(peak, 0.05, 0.75)

@@ -81,7 +81,8 @@ def test_fit_lut_tail_stage():
     q = spectra[:, wl > 730].max(1) / spectra[:, wl <= 730].max(1)
     assert q.max() <= TAIL_RATIO * 1.01
     old_sp = np.asarray(up.sigmoid_polynomial_jakob2019(old[tail_free], wl))
-    assert np.all(old_sp[:, wl > 730].max(1) / old_sp[:, wl <= 730].max(1) > TAIL_RATIO)
+    # (q is defined on the continuous interval; this 1 nm grid can only see it a hair lower)
+    assert np.all(old_sp[:, wl > 730].max(1) / old_sp[:, wl <= 730].max(1) > 0.99 * TAIL_RATIO)
 
 
 @pytest.mark.slow
