@@ -33,6 +33,7 @@ from jaxtyping import Array, Float
 
 from .._checks import check_positive_int
 from ._forward import forward_model
+from ._layout import column_directions
 from ._lm import (
     DEFAULT_TOLERANCE,
     LMState,
@@ -44,7 +45,7 @@ from ._lm import (
     residual_and_jacobian,
     target_Lab,
 )
-from ._lut import REFINE_STEPS, RGBToSpectrumLUT, brightness_scale, column_directions
+from ._lut import REFINE_STEPS, RGBToSpectrumLUT, brightness_scale
 from ._sigmoid_polynomial import _normalised_to_nm_np
 from ._tails import suppress_infrared_tails
 
@@ -130,8 +131,9 @@ class RESULTS(optx.RESULTS):
     `out_of_reach`: above the tolerance at a stationary point of the least-squares problem:
     no sigmoid-polynomial reflectance in [0, 1] reproduces the colour (wide-gamut spaces have
     colours beyond the object-colour solid), and the entry is the best fit;
-    `tail_free`: the fit had an infrared tail and the entry is the tail stage's refit (within
-    `_tails.TAIL_TOLERANCE` of the colour, tail ratio at most `_tails.TAIL_RATIO`).
+    `tail_free`: the fit had converged with an infrared tail, and the entry is the tail stage's
+    refit (within `_tails.TAIL_TOLERANCE` of the colour, tail ratio at most
+    `_tails.TAIL_RATIO`); an out-of-reach entry that the stage refits stays `out_of_reach`.
 
     ??? cite "References"
         `Rader2024` (optimistix's `RESULTS`); thesis eq. 2.27.
@@ -572,7 +574,9 @@ def fit_lut(
         stage = suppress_infrared_tails(table, scale_np, model.colourspace, progress=progress)
         table = stage.coeffs
         resid_t = np.where(stage.replaced, stage.residual, resid_t).astype(resid_t.dtype)
-        code = np.where(stage.replaced, 3, code)
+        # A converged entry becomes `tail_free`; an out-of-reach one stays out of reach (its
+        # colour is still beyond the family; the refit is its tail-free approximation).
+        code = np.where(stage.replaced & (code == 0), 3, code)
         tail_report = stage.report
     result = _results_array(code)
     # Entries no reflectance reaches: this table's lookups are refined by the fit (`_lut.py`).

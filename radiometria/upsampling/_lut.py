@@ -49,22 +49,11 @@ from ._sigmoid_polynomial import (
     nm_to_normalised_coefficients,
     normalised_to_nm_coefficients,
 )
+from ._tails import _DEEP_RED, _DEEP_RED_Z, TAIL_RATIO, TAIL_TOLERANCE, TAIL_WEIGHT, _penalised_lm
 
 # Levenberg-Marquardt iterations of each of a refined lookup's two starts (module docstring):
 # 16 left max CIEDE2000 0.36-0.47 on Rec.2020 and ACEScg, 32 gives 0.02-0.06.
 REFINE_STEPS = 32
-
-
-def column_directions(resolution: int, dtype) -> np.ndarray:
-    """Unit-brightness RGB of every column (3 res res, 3): e[l] = 1, e[l+1] = x, e[l+2] = y."""
-    t = np.arange(resolution, dtype=np.float64) / (resolution - 1)
-    j, i = np.meshgrid(np.arange(resolution), np.arange(resolution), indexing="ij")
-    e = np.zeros((3, resolution, resolution, 3))
-    for ch in range(3):
-        e[ch, :, :, ch] = 1.0
-        e[ch, :, :, (ch + 1) % 3] = t[i]
-        e[ch, :, :, (ch + 2) % 3] = t[j]
-    return e.reshape(-1, 3).astype(dtype)
 
 
 def brightness_scale(resolution: int, dtype=np.float64) -> np.ndarray:
@@ -259,14 +248,6 @@ def _refine(lut: RGBToSpectrumLUT, rgb: Array, c_nm: Array) -> Array:
     value.
     """
     # `_tails` builds on this module's table layout, hence the import here.
-    from ._tails import (
-        _DEEP_RED,
-        _DEEP_RED_Z,
-        TAIL_RATIO,
-        TAIL_TOLERANCE,
-        TAIL_WEIGHT,
-        _penalised_lm,
-    )
 
     dtype = rgb.dtype
     m = ModelArrays.build(forward_model(lut.colourspace), dtype)

@@ -33,6 +33,7 @@ from ..colorimetry import get_colourspace
 from ._data import DATA_DIR, PACKAGED_FILES, encode_planes, read_packaged
 from ._fit_lut import fit_lut
 from ._io import checksum
+from ._layout import column_directions
 from ._lut import REFINE_STEPS, RGBToSpectrumLUT
 from ._roundtrip import (
     has_reflectance,
@@ -41,7 +42,7 @@ from ._roundtrip import (
     roundtrip_random_rgb,
     roundtrip_statistics,
 )
-from ._tails import suppress_infrared_tails
+from ._tails import colour_errors, suppress_infrared_tails
 
 FORMAT = "radiometria-rgb2spec-planes"
 LINEAR_GRID = 49  # the dense linear grid of the RGB cube: 49^3 = 117 649 colours
@@ -102,13 +103,23 @@ def apply_tail_stage(space="sRGB", out=None) -> dict:
     scale, coeffs, meta = read_packaged(src)
     if meta["fit"].get("infrared_tails", "off") != "off":
         raise ValueError(f"{src}: the tail stage has already run on this table.")
+    coeffs_old = coeffs
     stage = suppress_infrared_tails(coeffs, scale, name)
     coeffs = np.asarray(stage.coeffs, np.float32)
-    n = int(stage.replaced.sum())
+    # The file keeps no per-entry fit codes, so the replaced entries are classified as
+    # `fit_lut` classifies them: converged (-> `tail_free`) where the stored entry was within
+    # the fit's tolerance of its colour, out of reach (stays so) where not; row 0 is exact.
+    res = scale.shape[0]
+    l_, k_, j_, i_ = np.nonzero(stage.replaced[:, 1:])
+    rgb = column_directions(res, np.float64).reshape(3, res, res, 3)[l_, j_, i_]
+    rgb = rgb * np.asarray(scale, np.float64)[k_ + 1, None]
+    de_old = colour_errors(np.asarray(coeffs_old)[l_, k_ + 1, j_, i_], rgb, name)
+    n = int((de_old <= meta["fit"]["tolerance_delta_E_ab"]).sum())
+    n += int(stage.replaced[:, 0].sum())
     meta = dict(meta)
     meta["fit"] = {**meta["fit"], "infrared_tails": stage.report}
     summary = dict(meta["fit_summary"])
-    summary["converged"] -= n  # they were converged on a tail, now tail-free refits
+    summary["converged"] -= n
     summary["tail_free"] = n
     meta["fit_summary"] = summary
     meta["sha256"] = checksum(scale, coeffs)

@@ -62,8 +62,8 @@ from jaxtyping import Array
 
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ._forward import forward_model
+from ._layout import column_directions
 from ._lm import ModelArrays, _lm_direction, residual_and_jacobian, target_Lab
-from ._lut import column_directions
 from ._sigmoid_polynomial import _nm_to_normalised_np, _normalised_to_nm_np, _sigmoid
 
 TAIL_START_NM = 730.0  # above it the CIE 1931 CMFs are below 0.2 % of their peaks
@@ -201,6 +201,14 @@ class TailStage(NamedTuple):
     report: dict  # counts and bounds, JSON-able
 
 
+def colour_errors(coeffs_nm: np.ndarray, rgb: np.ndarray, colourspace: str) -> np.ndarray:
+    """Delta E*ab (n,) of nm coefficients (n, 3) against linear RGB (n, 3) (float64)."""
+    with jax.enable_x64(True):
+        m64 = ModelArrays.build(forward_model(colourspace), jnp.float64)
+        c = _nm_to_normalised_np(np.asarray(coeffs_nm, np.float64))
+        return _chunked(_colour_error, np.concatenate([c, rgb], -1), m64)
+
+
 def suppress_infrared_tails(
     coeffs_nm: np.ndarray,
     scale: np.ndarray,
@@ -274,10 +282,9 @@ def suppress_infrared_tails(
         new_nm = _normalised_to_nm_np(c).astype(out.dtype)
     finite = np.all(np.isfinite(new_nm), -1)
     new_nm[~finite] = 0.0
+    de = colour_errors(new_nm, rgb, colourspace)
     with jax.enable_x64(True):
-        stored = _nm_to_normalised_np(new_nm.astype(np.float64))
-        de = _chunked(_colour_error, np.concatenate([stored, rgb], -1), m64)
-        qn = _chunked(_log_q, stored, m64)
+        qn = _chunked(_log_q, _nm_to_normalised_np(new_nm.astype(np.float64)), m64)
     ok = (de <= tolerance) & (qn <= log_bound + 1e-3) & finite
     kk, rest = np.divmod(cand[ok], 3 * res * res)
     l_, j_, i_ = np.unravel_index(rest, (3, res, res))
