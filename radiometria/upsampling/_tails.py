@@ -184,14 +184,6 @@ def deep_red_start(z) -> np.ndarray:
     return _DEEP_RED * np.sqrt(_DEEP_RED_Z / z)[..., None]
 
 
-def tail_ratios(coeffs_nm: np.ndarray, colourspace: str = "sRGB") -> np.ndarray:
-    """q of nm coefficients (..., 3) on the forward model's grid (float64, NumPy)."""
-    with jax.enable_x64(True):
-        m = ModelArrays.build(forward_model(colourspace), jnp.float64)
-        c = _nm_to_normalised_np(np.asarray(coeffs_nm, np.float64).reshape(-1, 3))
-        return np.exp(_chunked(_log_q, c, m)).reshape(np.shape(coeffs_nm)[:-1])
-
-
 class TailStage(NamedTuple):
     """What `suppress_infrared_tails` returns."""
 
