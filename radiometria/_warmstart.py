@@ -54,7 +54,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import jax
@@ -194,12 +194,13 @@ def parse_defines(items) -> dict[str, str]:
 
 @dataclass(frozen=True)
 class RenderSettings:
-    """`radiometria render`'s checked arguments (see `render_settings`)."""
+    """`radiometria render`'s checked arguments (see `render_settings`); `spp` and `seed` are
+    `None` where the command line leaves them to the scene (`with_scene_defaults`)."""
 
-    spp: int
+    spp: int | None
     width: int | None
     height: int | None
-    seed: int
+    seed: int | None
     max_depth: int | None
     out: Path
     spectral: bool
@@ -231,6 +232,19 @@ def render_settings(args) -> RenderSettings:
     )
     defines = parse_defines(getattr(args, "define", None))
     return RenderSettings(spp, width, height, seed, max_depth, out, spectral, checkpoint, defines)
+
+
+#: Samples per pixel of a scene that names no sampler `sample_count` (the command line's).
+DEFAULT_SPP = 64
+
+
+def with_scene_defaults(opts: RenderSettings, scene: dict) -> RenderSettings:
+    """`opts` with the spp and seed the command line left open taken from the scene file's
+    sampler (`scene`: `{"spp": ..., "seed": ...}`, values `None` where the file has none),
+    else `DEFAULT_SPP` and 0."""
+    spp = opts.spp if opts.spp is not None else scene.get("spp") or DEFAULT_SPP
+    seed = opts.seed if opts.seed is not None else scene.get("seed") or 0
+    return replace(opts, spp=int(spp), seed=int(seed))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -136,6 +136,7 @@ def _render_from_entry(args: argparse.Namespace, opts, entry) -> int:
     """Render from a step entry and write the image as `render_command` does."""
     from . import _warmstart as warm
 
+    opts = warm.with_scene_defaults(opts, entry.meta.get("scene_defaults", {}))
     identity = {**entry.meta["identity"], "seed": opts.seed, "spp": opts.spp}
 
     def on_checkpoint(xyz_sum, weight_sum, done):
@@ -243,11 +244,16 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("render", help="render a scene")
     p.add_argument("scene", help="'cornell-box', 'cornell-box-measured' or a scene file")
-    p.add_argument("--spp", type=int, default=64, help="samples per pixel [64]")
+    p.add_argument(
+        "--spp", type=int, default=None,
+        help="samples per pixel [the scene file's sample_count, else 64]",
+    )  # fmt: skip
     p.add_argument("--out", type=Path, required=True, help="output image (.exr or .png)")
     p.add_argument("--width", type=int, default=None, help="image width [scene's]")
     p.add_argument("--height", type=int, default=None, help="image height [scene's]")
-    p.add_argument("--seed", type=int, default=0, help="random seed [0]")
+    p.add_argument(
+        "--seed", type=int, default=None, help="random seed [the scene file's sampler seed, else 0]"
+    )
     p.add_argument("--max-depth", type=int, default=None, help="maximum path depth [scene's]")
     p.add_argument(
         "-D",

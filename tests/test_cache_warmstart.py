@@ -75,6 +75,45 @@ def test_second_render_uses_the_step_cache_and_renders_the_same_image(tmp_path):
     assert compilation_cache_info(cache).steps == 1
 
 
+SEEDED = """<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 0, 4" target="0, 0, 0" up="0, 1, 0"/>
+    </transform>
+    <sampler type="independent"><integer name="sample_count" value="2"/>
+      <integer name="seed" value="3"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/>
+    </film></sensor>
+  <shape type="rectangle"><transform name="to_world"><translate z="-1"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.6, 0.7"/></bsdf></shape>
+  <shape type="sphere"><float name="radius" value="0.4"/><point name="center" x="0" y="1"
+    z="0.5"/><emitter type="area"><rgb name="radiance" value="4, 4, 4"/></emitter></shape>
+</scene>
+"""
+
+
+@pytest.mark.slow
+def test_the_scene_files_sample_count_and_seed_survive_the_warm_start(tmp_path):
+    """Without --spp and --seed the scene's sampler sets them, in the first (cache-writing)
+    process and in the second, which renders from the step entry without loading the scene:
+    both images equal `--spp 2 --seed 3` rendered without any cache, and say so in their
+    metadata."""
+    scene = tmp_path / "seeded.xml"
+    scene.write_text(SEEDED)
+    first = _run(tmp_path, "render", str(scene), "--out", str(tmp_path / "a.exr"))
+    assert "step cache missed" in first
+    second = _run(tmp_path, "render", str(scene), "--out", str(tmp_path / "b.exr"))
+    assert "step cache entry loaded" in second
+    plain = ["--no-cache", "render", str(scene), "--spp", "2", "--seed", "3"]
+    _run(tmp_path, *plain, "--out", str(tmp_path / "c.exr"))
+    _run(tmp_path, *plain[:-1], "0", "--out", str(tmp_path / "d.exr"))
+    (a, meta_a), (b, meta_b), (c, _), (d, _) = (read_exr(tmp_path / f"{n}.exr") for n in "abcd")
+    np.testing.assert_array_equal(a, c)
+    np.testing.assert_array_equal(b, c)
+    assert not np.array_equal(c, d)  # the seed took effect
+    for meta in (meta_a, meta_b):
+        assert (int(meta["spp"]), int(meta["seed"]), int(meta["spp_reached"])) == (2, 3, 2)
+
+
 def _fake_entry(tmp_path, dependency=None):
     request = {"format": warm.FORMAT, "scene": {"name": "x"}, "options": {}}
     meta = {"tile": 4, "native": None}

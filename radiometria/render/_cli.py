@@ -14,6 +14,7 @@ from pathlib import Path
 
 from .._timing import mark, timing_enabled
 from .._warmstart import (
+    DEFAULT_SPP,
     MAX_IMAGE_SIDE as MAX_IMAGE_SIDE,
     check_int as _check_int,
     check_output as _check_output,
@@ -21,6 +22,7 @@ from .._warmstart import (
     recording_opened_files,
     render_settings,
     save_entry,
+    with_scene_defaults,
 )
 from ..camera import write_exr, write_png, write_spectral_exr
 from ._cache import (
@@ -82,11 +84,14 @@ def _render_to(
     progress=True,
     defines=None,
     step_cache=None,
+    resolved=None,
     **long_render,
 ):
     """Render a scene as the command line does; `long_render` are `render`'s checkpoint and
     preview arguments, `defines` the `-D name=value` parameters of an XML scene, `step_cache`
-    `(directory, request)` to write the render's step entry (`radiometria._warmstart`)."""
+    `(directory, request)` to write the render's step entry (`radiometria._warmstart`).
+    `spp` and `seed` may be `None`: the scene file's sampler sets them (else 64 and 0), and
+    `resolved` (a dict), when given, receives the file's values as `{"spp", "seed"}`."""
     if sampler is not None and sampler not in SAMPLERS:
         raise ValueError(f"--sampler must be one of {sorted(SAMPLERS)}, got {sampler!r}.")
     params = _defines(defines)
@@ -111,6 +116,12 @@ def _render_to(
         with checks_without_callbacks():
             scene, camera, rfilter = compile_scene(description, width=width, height=height)
     mark("scene compiled" + jax_activity.summary())
+    # The scene's sampler sets what the command line leaves open (--spp, --seed).
+    file_defaults = {"spp": description.spp, "seed": description.seed}
+    if resolved is not None:
+        resolved.update(file_defaults)
+    spp = int(spp if spp is not None else description.spp or DEFAULT_SPP)
+    seed = int(seed if seed is not None else description.seed or 0)
     metadata = {
         "software": f"radiometria {importlib.metadata.version('radiometria')}",
         "scene": str(scene_name),
@@ -127,8 +138,9 @@ def _render_to(
 
         def save(*, meta, **entry):
             save_entry(
-                directory, request, meta={**meta, "metadata": metadata}, dependencies=read, **entry
-            )
+                directory, request, meta={**meta, "metadata": metadata,
+                "scene_defaults": file_defaults}, dependencies=read, **entry,
+            )  # fmt: skip
 
         long_render["_step_cache"] = save
     rgb = render(
@@ -157,22 +169,25 @@ def render_command(args: argparse.Namespace, *, step_cache=None) -> int:
     and the command exits with 130 or 143 without a traceback.
     """
     opts = render_settings(args)
-    spp, seed, out, spectral, checkpoint = (
-        opts.spp, opts.seed, opts.out, opts.spectral, opts.checkpoint
-    )  # fmt: skip
+    out, spectral, checkpoint = opts.out, opts.spectral, opts.checkpoint
     extra = {"spectral_bins": SPECTRAL_BINS} if spectral else {}
-    settings = dict(scene=str(args.scene), spp=spp, seed=seed)
+    file_defaults: dict = {}  # the scene's sampler: spp and seed where the options leave them
+
+    def settings():
+        o = with_scene_defaults(opts, file_defaults)
+        return dict(scene=str(args.scene), spp=o.spp, seed=o.seed)
 
     def preview(rgb, spp_reached):
-        _write(out, rgb, {**settings, "spp_reached": int(spp_reached)})
+        _write(out, rgb, {**settings(), "spp_reached": int(spp_reached)})
 
     try:
         rgb, metadata = _render_to(
             args.scene,
-            spp=spp,
+            spp=opts.spp,
             width=opts.width,
             height=opts.height,
-            seed=seed,
+            seed=opts.seed,
+            resolved=file_defaults,
             max_depth=opts.max_depth,
             integrator=args.integrator,
             sampler=args.sampler,
@@ -186,7 +201,8 @@ def render_command(args: argparse.Namespace, *, step_cache=None) -> int:
             **extra,
         )
     except RenderInterrupted as stop:
-        _write(out, stop.image, {**settings, "spp_reached": int(stop.spp_reached)})
+        spp = settings()["spp"]
+        _write(out, stop.image, {**settings(), "spp_reached": int(stop.spp_reached)})
         where = (
             f"; checkpoint {stop.checkpoint} (continue with --resume)" if stop.checkpoint else ""
         )
@@ -196,7 +212,7 @@ def render_command(args: argparse.Namespace, *, step_cache=None) -> int:
             file=sys.stderr,
         )
         return 130 if stop.signal_name == "SIGINT" else 143
-    _write(out, rgb, {**metadata, "spp_reached": int(spp)})
+    _write(out, rgb, {**metadata, "spp_reached": int(metadata["spp"])})
     mark("image written" + jax_activity.summary())
     if not args.checkpoint and checkpoint.exists():
         checkpoint.unlink()  # the default checkpoint of a finished render is not needed

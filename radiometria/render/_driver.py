@@ -412,8 +412,8 @@ def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> F
 def render(
     scene,
     *,
-    spp: int,
-    seed: int = 0,
+    spp: int | None = None,
+    seed: int | None = None,
     width: int | None = None,
     height: int | None = None,
     integrator=None,  # AbstractIntegrator | None; checked below with a message for strings
@@ -444,8 +444,10 @@ def render(
     - `scene`: a built-in scene name (`"cornell-box"`, `"cornell-box-measured"`), a scene
         file path, a loaded scene description (`load_scene`), or a `RenderScene` together with
         `camera`.
-    - `spp`: samples (camera paths) per pixel, >= 1.
+    - `spp`: samples (camera paths) per pixel, >= 1; default: the scene file's
+        `sample_count` (a `ValueError` where there is none).
     - `seed`: the seed of `jax.random.key`; the image is a deterministic function of it.
+        Default: the scene file's sampler `seed`, else 0.
     - `width`, `height`: image size [px]; default: the scene's film.
     - `integrator`: an `AbstractIntegrator`; default: the one the scene file asks for (its
         `max_depth` and `rr_depth`), else `Path()` (NEE + MIS + Russian roulette, 8 segments).
@@ -516,16 +518,25 @@ def render(
         `Pharr2023` ch. 5, 8, 13; `Jakob2022`; `Wilkie2014`; `Ernst2006` (filter importance
         sampling).
     """
-    spp = check_positive_int(spp, "spp")
     _check_plugin(integrator, "integrator", AbstractIntegrator, INTEGRATORS, "Path(max_depth=8)")
     _check_plugin(sampler, "sampler", AbstractSampler, SAMPLERS, "OwenSobol()")
     check_choice(reconstruction, "reconstruction", RECONSTRUCTIONS)
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int | np.integer)):
         raise TypeError(f"`seed` must be an int, got {type(seed).__name__} {seed!r}.")
+    if spp is not None:
+        spp = check_positive_int(spp, "spp")
     with checks_without_callbacks():  # the loader has checked the values (see _cache.py)
-        scene, camera, rfilter, scene_integrator_, scene_sampler_ = _resolve_scene(
-            scene, camera, rfilter, width, height
+        scene, camera, rfilter, scene_integrator_, scene_sampler_, file_spp, file_seed = (
+            _resolve_scene(scene, camera, rfilter, width, height)
         )
+    if spp is None:
+        if file_spp is None:
+            raise ValueError(
+                "`spp` is required: the scene names no sampler `sample_count` (samples per "
+                "pixel, >= 1)."
+            )
+        spp = file_spp
+    seed = (0 if file_seed is None else file_seed) if seed is None else seed
     integrator = scene_integrator_ if integrator is None else integrator
     sampler = scene_sampler_ if sampler is None else sampler
     if getattr(integrator, "MARKOV_CHAINS", False):  # `PSSMLT`: chains, not independent steps
@@ -776,8 +787,8 @@ def _check_plugin(value, name: str, base: type, registry: dict, example: str) ->
 
 
 def _resolve_scene(scene, camera, rfilter, width, height):
-    """(RenderScene, camera, filter, default integrator, default sampler) from what `render`
-    got."""
+    """(RenderScene, camera, filter, default integrator, default sampler, the file's spp, the
+    file's seed) from what `render` got."""
     if isinstance(scene, str | os.PathLike):
         scene = load_scene(scene)
     if isinstance(scene, SceneDescription):
@@ -785,7 +796,7 @@ def _resolve_scene(scene, camera, rfilter, width, height):
             raise ValueError("`camera` is for a RenderScene; a loaded scene has its own camera.")
         rs, cam, filt = compile_scene(scene, width=width, height=height)
         filt = filt if rfilter is None else rfilter
-        return rs, cam, filt, scene_integrator(scene), scene_sampler(scene)
+        return rs, cam, filt, scene_integrator(scene), scene_sampler(scene), scene.spp, scene.seed
     if isinstance(scene, RenderScene):
         if camera is None:
             raise ValueError("Rendering a `RenderScene` needs `camera` (an AbstractCamera).")
@@ -801,7 +812,7 @@ def _resolve_scene(scene, camera, rfilter, width, height):
                     "with the image size you want."
                 )
         filt = GaussianFilter() if rfilter is None else rfilter
-        return scene, camera, filt, Path(), Independent()
+        return scene, camera, filt, Path(), Independent(), None, None
     raise TypeError(
         f"`scene` must be a scene name, a path, a loaded scene or a RenderScene, got "
         f"{type(scene).__name__}."

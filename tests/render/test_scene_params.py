@@ -1,7 +1,7 @@
 """Scene parameters that were once accepted and ignored (issue 12): the microfacet
 `distribution` of rough BSDFs (Mitsuba's default Beckmann), `hide_emitters` of `path`,
-sampler seeds, film crop windows and principal point offsets (rendered, against Mitsuba 3),
-`focus_distance` of a pinhole camera, and spectra from `.spd` files and
+sampler seeds and sample counts, film crop windows and principal point offsets (rendered,
+against Mitsuba 3), `focus_distance` of a pinhole camera, and spectra from `.spd` files and
 `regular`/`irregular` spectrum plugins."""
 
 import numpy as np
@@ -99,7 +99,8 @@ def test_distribution_selects_the_plugin_kind():
 @pytest.mark.parametrize(
     "where,xml,match",
     [
-        ("sampler", '<integer name="seed" value="3"/>', "seed.*3.*--seed"),
+        ("sampler", '<integer name="seed" value="-3"/>', r"seed must be in \[0, 2\^31\), got -3"),
+        ("sampler", '<integer name="scramble_seed" value="2"/>', "'scramble_seed' = 2.*only 0"),
         # Crop windows that leave the film, refused as Mitsuba refuses them.
         ("film", '<integer name="crop_width" value="20"/>', r"crop window 20 x 16 at \(0, 0\)"),
         ("film", '<integer name="crop_offset_y" value="2"/>', r"16 x 16 at \(0, 2\).*does not"),
@@ -115,6 +116,35 @@ def test_unsupported_sensor_values_are_refused(tmp_path, where, xml, match):
     path.write_text(_xml("", **{where: xml}))
     with pytest.raises(ValueError, match=rf"scene.xml:\d+: .*{match}"):
         load_mitsuba_xml(path)
+
+
+def test_sampler_seed_and_sample_count_set_the_render(tmp_path):
+    """The file's sampler `seed` and `sample_count` are the render's defaults (Mitsuba's
+    meaning: the seed offsets the random sequence): `render(path)` without `spp`/`seed` is
+    `render(path, spp=sample_count, seed=seed)`, the caller's arguments win, and a scene
+    without `sample_count` needs `spp`."""
+    from radiometria.render import render
+
+    seeded, plain = tmp_path / "seeded.xml", tmp_path / "plain.xml"
+    seeded.write_text(
+        _xml("", sampler='<integer name="seed" value="3"/>').replace('"16"/>', '"2"/>', 1)
+    )
+    plain.write_text(_xml(""))
+    desc = load_mitsuba_xml(seeded)
+    assert (desc.seed, desc.spp, load_mitsuba_xml(plain).seed) == (3, 2, None)
+
+    def y(scene, **kw):
+        return np.asarray(render(scene, return_xyz=True, progress=False, **kw))[..., 1]
+
+    default = y(seeded)
+    np.testing.assert_array_equal(default, y(plain, spp=2, seed=3))  # the same render
+    assert not np.array_equal(default, y(plain, spp=2, seed=0))  # the seed took effect
+    assert not np.array_equal(default, y(seeded, seed=0))  # the caller's seed wins
+    np.testing.assert_array_equal(y(seeded, seed=0), y(plain, spp=2))
+    no_count = tmp_path / "no_count.xml"
+    no_count.write_text(_xml("").replace('<integer name="sample_count" value="16"/>', ""))
+    with pytest.raises(ValueError, match="`spp` is required.*sample_count"):
+        render(no_count, progress=False)
 
 
 def test_crop_window_and_principal_point_match_mitsuba(tmp_path):

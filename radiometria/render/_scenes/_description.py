@@ -274,6 +274,8 @@ class SceneDescription:
     - `integrator_params`: the integrator's other parameters as `(name, value)` pairs (e.g.
         `(("hide_emitters", True),)`), passed to its `from_properties`.
     - `spp`: samples per pixel the file asks for, or `None`.
+    - `seed`: the sampler's seed the file asks for (Mitsuba's seed offset; the render's
+        `jax.random.key` seed), or `None`.
     - `sampler`: the sampler the file asks for, a name of
         `radiometria.render._registry.SAMPLERS` (Mitsuba's names), or `None` where it names
         none (`render` then uses Mitsuba's default, `independent`; the command line its
@@ -309,6 +311,7 @@ class SceneDescription:
     max_depth: int | None = 8
     rr_depth: int = 5
     spp: int | None = None
+    seed: int | None = None
     integrator: str = "path"
     integrator_params: tuple = ()
     sampler: str | None = None

@@ -55,7 +55,7 @@ and rejects everything else with an error that names the file, the line and the 
 - `sampler`: a name of `radiometria.render._registry.SAMPLERS`: `independent`, or Mitsuba's
   stratified and low-discrepancy samplers `stratified`, `multijitter`, `ldsampler`, `sobol`,
   all rendered with padded Owen-scrambled Sobol points (`OwenSobol`, stratified in every
-  elementary interval); `sample_count` becomes the scene's `spp`.
+  elementary interval); `sample_count` becomes the scene's `spp` and `seed` its `seed`.
 - `integrator`: every plugin of `radiometria.render._registry.INTEGRATORS`: `path` with
   `max_depth` (-1 = unbounded), `rr_depth`, `hide_emitters` (ignored); `direct`; `moment`
   (Mitsuba's wrapper that adds the moments of its one nested integrator to the film) renders
@@ -939,7 +939,7 @@ def _sensor(ctx: _Ctx, node: _Node):
         far_clip=float(props.get("far_clip", 1e4)),
     )
     film = FilmDescription(width=768, height=576)
-    spp, sampler = None, None  # None: the file names no sampler
+    spp, sampler, seed = None, None, None  # None: the file names no sampler
     for ch in node.children:
         if ch.tag == "film":
             film = _film(ctx, ch)
@@ -955,15 +955,18 @@ def _sensor(ctx: _Ctx, node: _Node):
             spp = sp.get("sample_count")
             if spp is not None and spp < 1:
                 raise ctx.err(ch, f"sample_count must be >= 1, got {spp}")
-            # The render seed is the caller's (`render(seed=...)`, `--seed`, default 0): a
-            # scene's other seed would be silently dropped, so it is refused.
-            for name in ("seed", "scramble_seed"):
-                if sp.get(name, 0) != 0:
-                    raise ctx.err(
-                        ch, f"parameter '{name}' = {sp[name]} is not supported (only 0); give "
-                        "the seed to render(seed=...) or the command line's --seed"
-                    )  # fmt: skip
-    return camera, film, spp, sampler
+            # Mitsuba's `seed` offsets the sampler's random sequence: here it is the render's
+            # seed (`jax.random.key(seed)`) unless the caller gives one. `scramble_seed` (no
+            # Mitsuba 3 sampler has it) would be silently dropped, so only 0 is accepted.
+            seed = sp.get("seed")
+            if seed is not None and not 0 <= seed < 2**31:
+                raise ctx.err(ch, f"seed must be in [0, 2^31), got {seed}")
+            if sp.get("scramble_seed", 0) != 0:
+                raise ctx.err(
+                    ch, f"parameter 'scramble_seed' = {sp['scramble_seed']} is not supported "
+                    "(only 0); give the sampler's 'seed' instead"
+                )  # fmt: skip
+    return camera, film, spp, sampler, seed
 
 
 def _film(ctx: _Ctx, node: _Node) -> FilmDescription:
@@ -1145,7 +1148,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
     lights: list[LightDescription] = []
     camera = CameraDescription(to_world=np.eye(4), fov_deg=45.0, fov_axis="x")
     film = FilmDescription(width=768, height=576)
-    spp, sampler = None, None  # None: the file names no sampler
+    spp, sampler, seed = None, None, None  # None: the file names no sampler
     max_depth: int | None = None
     rr_depth = 5
     integrator = "path"
@@ -1163,7 +1166,7 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         elif ch.tag == "texture" and "id" in ch.attrib:  # used by <ref> (_textures_xml)
             ctx.refs[ch.attrib["id"]] = (ch, texture_spec(ctx, ch, _properties))
         elif ch.tag == "sensor":
-            camera, film, spp, sampler = _sensor(ctx, ch)
+            camera, film, spp, sampler, seed = _sensor(ctx, ch)
         elif ch.tag == "integrator":
             integrator, p = _integrator(ctx, ch)
             md = p.get("max_depth", -1)
@@ -1182,4 +1185,6 @@ def load_mitsuba_xml(path, *, params: dict | None = None) -> SceneDescription:
         integrator=integrator, unit="file units", source=file, lights=tuple(lights),
         **media.assemble_args(),
     )  # fmt: skip
-    return dataclasses.replace(scene, sampler=sampler, integrator_params=integrator_params)
+    return dataclasses.replace(
+        scene, sampler=sampler, seed=seed, integrator_params=integrator_params
+    )
