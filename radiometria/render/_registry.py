@@ -46,7 +46,12 @@ from ._materials import (
 from ._materials._null import Null
 from ._media import GridMediumPlugin, HomogeneousMediumPlugin
 from ._samplers import Independent, OwenSobol
-from ._textures import BitmapTexture, CheckerboardTexture, ConstantTexture
+from ._textures import (
+    BitmapTexture,
+    CheckerboardTexture,
+    ConstantTexture,
+    MeshAttributeTexture,
+)
 
 __all__ = [
     "ACCELERATORS",  # from _accelerators
@@ -98,6 +103,7 @@ TEXTURES = {
     "constant": ConstantTexture,
     "bitmap": BitmapTexture,
     "checkerboard": CheckerboardTexture,
+    "mesh_attribute": MeshAttributeTexture,
 }
 # Mitsuba 3's `<sensor type=...>` names.
 CAMERAS = {

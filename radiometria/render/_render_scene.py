@@ -52,6 +52,10 @@ class RenderScene(eqx.Module):
         without uvs) gives the hit's barycentrics $(b_1, b_2)$ as uv, as Mitsuba 3. [1]
     - `shading_normal`: `(f, 3, 3)` unit normals at the three corners of each triangle
         (vertex normals), interpolated into the shading normal; `None`: flat shading.
+    - `face_attributes`: `(f, a)` mesh attributes baked per triangle for `mesh_attribute`
+        textures (blocks of `radiometria.render._textures._mesh_attribute.ATTRIBUTE_BLOCK`
+        columns), or `None`. With them a hit's surface coordinates (the `uv` the textures
+        get) are `(u, v, b1, b2, *face_attributes[face])`; without, `(u, v)`.
 
     !!! note "Thesis"
         Chapter 8 (the scene of the light transport equation).
@@ -75,6 +79,13 @@ class RenderScene(eqx.Module):
     camera_medium: int = eqx.field(static=True, default=-1)
     face_uv: Float[Array, "f 3 2"] | None = None  # uv at each triangle's corners (textures)
     shading_normal: Float[Array, "f 3 3"] | None = None  # unit normals at the corners
+    face_attributes: Float[Array, "f a"] | None = None  # mesh attributes (mesh_attribute)
+
+    @property
+    def surface_width(self) -> int:
+        """Columns of a hit's surface coordinates: 2 (u, v), or 4 + the baked attributes'
+        columns (u, v, b1, b2, attributes) when the scene has `face_attributes`."""
+        return 2 if self.face_attributes is None else 4 + int(self.face_attributes.shape[1])
 
     @classmethod
     def from_triangles(
@@ -97,6 +108,7 @@ class RenderScene(eqx.Module):
         camera_medium: int = -1,
         face_uv=None,
         shading_normal=None,
+        face_attributes=None,
     ) -> "RenderScene":
         """Lay out a triangle scene (NumPy work, done once, outside `jit`).
 
@@ -133,6 +145,8 @@ class RenderScene(eqx.Module):
             interpolated with the hit's barycentrics into the shading normal that orients
             the BSDF's frame (Mitsuba's vertex normals; `Pharr2023` §3.10.1), or `None`: the
             geometric normals shade. Rows equal to the face's normal shade flat.
+        - `face_attributes`: `(f, a)` baked mesh attributes of `mesh_attribute` textures
+            (`compile_scene` makes them), or `None`.
         """
         vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
@@ -180,6 +194,11 @@ class RenderScene(eqx.Module):
         shading_normal = _optional_face_array(
             shading_normal, "shading_normal", (n_faces, 3, 3), dtype
         )
+        if face_attributes is not None:
+            a = np.asarray(face_attributes)
+            face_attributes = _optional_face_array(
+                a, "face_attributes", (n_faces, a.shape[-1] if a.ndim == 2 else -1), dtype
+            )
         return cls(
             p0=p0,
             e1=e1,
@@ -191,6 +210,7 @@ class RenderScene(eqx.Module):
             accelerator=accelerator,
             face_uv=face_uv,
             shading_normal=shading_normal,
+            face_attributes=face_attributes,
             **media_fields,
         )
 

@@ -415,7 +415,7 @@ class BDPT(AbstractIntegrator):
                 ns=ng,
                 wo=zero3,
                 material=jnp.zeros((n,), jnp.int32),
-                uv=jnp.zeros((n, 2), dtype),
+                uv=jnp.zeros((n, scene.surface_width), dtype),
                 beta=beta,
                 pdf_fwd=pdf_fwd,
                 pdf_rev=jnp.zeros((n,), dtype),

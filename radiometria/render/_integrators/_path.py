@@ -102,7 +102,7 @@ class _Vertex(eqx.Module):
     face: Array  # int32, clipped to a valid index when not `valid`
     t: Array  # ray parameter of the hit
     cos_o: Array  # cos between n and -ray direction (> 0: the ray hit the front face)
-    uv: Array  # (n, 2) surface coordinates for textures (RenderScene.face_uv)
+    uv: Array  # (n, c) surface coordinates for textures (RenderScene.surface_width)
     ns: Array  # shading normal: interpolated vertex normals (RenderScene.shading_normal), or n
 
 
@@ -121,6 +121,8 @@ def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
     if scene.face_uv is not None:
         c = scene.face_uv[face]
         uv = (1.0 - b1 - b2) * c[:, 0] + b1 * c[:, 1] + b2 * c[:, 2]
+    if scene.face_attributes is not None:  # mesh_attribute textures: barycentrics, corners
+        uv = jnp.concatenate([uv, b1, b2, scene.face_attributes[face].astype(uv.dtype)], -1)
     ns = n
     if scene.shading_normal is not None:  # Mitsuba's vertex normals, interpolated
         c = scene.shading_normal[face]

@@ -255,7 +255,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         surface=jnp.zeros((n,), bool),
         cos_o=jnp.zeros((n,), dtype),
         mis=state.mis,
-        uv=jnp.zeros((n, 2), dtype),
+        uv=jnp.zeros((n, scene.surface_width), dtype),
         ns=jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3)),
     )
     d = state.d

@@ -170,7 +170,7 @@ class AbstractLight(eqx.Module):
         cos_o: Float[Array, " n"],
         valid: Bool[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> Float[Array, "n k"]:
         """Radiance [W m^-2 sr^-1 nm^-1] leaving the hit on triangle `face` towards the ray's
         origin, where `cos_o` is the cosine between the normal and that direction, `valid`

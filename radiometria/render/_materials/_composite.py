@@ -24,6 +24,7 @@ from .._spectral import LinearRGB
 from .._textures import (
     AbstractTexture,
     ConstantTexture,
+    MeshAttributeTexture,
     TextureSpec,
     concatenate_textures,
     texture_parameter,
@@ -43,8 +44,11 @@ def scalar_texture(
     (Mitsuba's `eval_1`): colour texels and colours become their luminance (Rec. 709 Y), so
     the texture's spectrum is flat and its first wavelength's value is the parameter.
     Numbers must lie in `[lower, upper]`. A checkerboard's colours swap places, as in
-    Mitsuba 3's scalar checkerboard lookup."""
+    Mitsuba 3's scalar checkerboard lookup. A mesh attribute's colours become their
+    luminance too (`MeshAttributeTexture`'s `"scalar"` kind)."""
     if isinstance(value, TextureSpec):
+        if value.type == "mesh_attribute":
+            return MeshAttributeTexture.from_name(value.attribute, None, value.scale)
         if value.type == "bitmap":
             y = np.clip(value.rgb @ _LUMINANCE, lower, upper)
             value = TextureSpec(

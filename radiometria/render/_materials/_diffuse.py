@@ -47,6 +47,6 @@ class Diffuse(AbstractMaterial):
         self,
         row: Int[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> DiffuseBxDF:
         return DiffuseBxDF(self.reflectance(row, wavelength_nm, uv))

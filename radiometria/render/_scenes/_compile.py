@@ -1,5 +1,8 @@
 """From a scene description to the renderer's plugins (thesis ch. 8; section 2.3)."""
 
+import dataclasses
+
+import jax
 import numpy as np
 
 from ...camera import AbstractCamera, AbstractFilter, OrthographicCamera, ThinLensCamera
@@ -9,6 +12,7 @@ from .._lights import AreaLight
 from .._registry import CAMERAS, FILTERS, INTEGRATORS, LIGHTS, MATERIALS, MEDIA, SAMPLERS
 from .._render_scene import RenderScene
 from .._samplers import AbstractSampler
+from .._textures._mesh_attribute import ATTRIBUTE_BLOCK, MeshAttributeTexture, corner_spectra
 from ._description import SceneDescription, SceneError
 
 __all__ = [
@@ -172,6 +176,7 @@ def compile_scene(
         materials.append(
             MATERIALS[m.type].from_properties(m.params, two_sided=m.two_sided, where=what)
         )
+    materials, face_attributes = _mesh_attributes(description, materials)
     radiance = AreaLight.radiance_texture([e.radiance for e in description.emitters])
     scene = RenderScene.from_triangles(
         description.vertices,
@@ -185,6 +190,7 @@ def compile_scene(
         accelerator=accelerator,
         **_scene_media(description, where),
         face_uv=face_uvs(description),
+        face_attributes=face_attributes,
         **_surface_attributes(description),
     )
     return scene, scene_camera(description, width, height), scene_filter(description)
@@ -256,6 +262,78 @@ def _surface_attributes(description: SceneDescription) -> dict:
     g = g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
     flat = np.isnan(n).any(axis=(1, 2))
     return {"shading_normal": np.where(flat[:, None, None], g[:, None, :], n)}
+
+
+def _is_attribute_texture(x) -> bool:
+    return isinstance(x, MeshAttributeTexture)
+
+
+def _mesh_attributes(description: SceneDescription, materials: list) -> tuple[list, object]:
+    """Place the materials' `mesh_attribute` textures among a hit's surface coordinates and
+    bake their attributes: `(materials, face_attributes)`, the second `(f, 12 a)` (a block
+    of 12 columns per attribute and spectrum kind: `MeshAttributeTexture`) or `None` when no
+    material reads an attribute. A triangle whose material reads an attribute its shape does
+    not have is an error naming the shape and the attributes it has; other triangles get
+    zeros."""
+    where = description.source or "scene"
+    keys: list[tuple[str, str]] = []
+    users: dict[tuple[str, str], set[int]] = {}
+    for i, m in enumerate(materials):
+        for t in jax.tree.leaves(m, is_leaf=_is_attribute_texture):
+            if _is_attribute_texture(t):
+                key = (t.attribute, t.spectrum)
+                if key not in users:
+                    keys.append(key)
+                users.setdefault(key, set()).add(i)
+    if not keys:
+        return materials, None
+    block = {key: k for k, key in enumerate(keys)}
+    materials = [
+        jax.tree.map(
+            lambda t: (
+                dataclasses.replace(t, block=block[(t.attribute, t.spectrum)])
+                if _is_attribute_texture(t)
+                else t
+            ),
+            m,
+            is_leaf=_is_attribute_texture,
+        )  # fmt: skip
+        for m in materials
+    ]
+    faces = np.asarray(description.faces, np.int64)
+    fm = np.asarray(description.face_material)
+    attrs = description.mesh_attributes
+    columns = []
+    for key in keys:
+        name, spectrum = key
+        used = np.isin(fm, sorted(users[key]))
+        values = _corner_values(attrs.get(name, np.zeros((0, 1))), name, faces)
+        bad = used & np.isnan(values).any(axis=(1, 2))
+        if bad.any():
+            shape = int(np.asarray(description.face_shape)[np.argmax(bad)])
+            mine = np.asarray(description.face_shape) == shape
+            has = [n for n, a in sorted(attrs.items())
+                   if not np.isnan(_corner_values(a, n, faces)[mine]).any()]  # fmt: skip
+            raise SceneError(
+                f"{where}: shape {description.shape_names[shape]!r} has a material with a "
+                f"mesh_attribute texture of {name!r}, which the shape's mesh does not have "
+                f"(its attributes: {', '.join(has) or 'none'})."
+            )
+        try:
+            block_values = corner_spectra(np.where(used[:, None, None], values, 0.0), spectrum)
+        except ValueError as e:
+            raise SceneError(f"{where}: mesh attribute {name!r}: {e}") from None
+        columns.append(block_values.reshape(len(faces), ATTRIBUTE_BLOCK))
+    return materials, np.concatenate(columns, axis=1)
+
+
+def _corner_values(values: np.ndarray, name: str, faces: np.ndarray) -> np.ndarray:
+    """`(f, 3, d)` values of a mesh attribute at each triangle's corners (a face attribute's
+    value at all three; NaN everywhere for an attribute the scene lacks, `(0, d)` rows)."""
+    if not len(values):
+        return np.full((len(faces), 3, values.shape[-1]), np.nan)
+    corners = values[faces] if name.startswith("vertex_") else values[:, None, :]
+    return np.broadcast_to(corners, (len(faces), 3, values.shape[-1]))
 
 
 def face_uvs(description: SceneDescription) -> np.ndarray | None:

@@ -293,6 +293,9 @@ class SceneDescription:
         normals; `None` when no shape has any.
     - `vertex_uvs`: `(v, 2)` texture coordinates, NaN rows for the vertices of shapes without
         uvs; `None` when no shape has any. [1]
+    - `mesh_attributes`: Mitsuba's mesh attributes of the shapes, by name
+        (`"vertex_<name>"`: `(v, d)` per vertex, `"face_<name>"`: `(f, d)` per triangle), NaN
+        rows for the shapes without that attribute (`mesh_attribute` textures read them).
 
     !!! note "Thesis"
         Ch. 8 (scene description for light transport); file formats of Mitsuba 3
@@ -325,6 +328,7 @@ class SceneDescription:
     camera_medium: int = -1
     vertex_normals: np.ndarray | None = None
     vertex_uvs: np.ndarray | None = None
+    mesh_attributes: dict = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         f = np.asarray(self.faces)
@@ -381,6 +385,8 @@ class ShapeDescription:
     exterior: int = -2  # medium in front of the normal
     normals: np.ndarray | None = None  # (v, 3) shading normals, or None: face normals shade
     uvs: np.ndarray | None = None  # (v, 2) texture coordinates, or None
+    # Mitsuba's mesh attributes: "vertex_<name>" (v, d) and "face_<name>" (f, d) arrays
+    attributes: dict = dataclasses.field(default_factory=dict)
 
 
 def assemble(
@@ -404,6 +410,7 @@ def assemble(
     sides: list[np.ndarray] = []
     normals: list[np.ndarray] = []
     uvs: list[np.ndarray] = []
+    attrs: dict[str, list[tuple[int, int, np.ndarray]]] = {}  # name: (shape, first row, values)
     offset = 0
     n_faces = 0
     for si, sh in enumerate(shapes):
@@ -415,6 +422,18 @@ def assemble(
             )
         except ValueError as e:
             raise SceneError(str(e)) from None
+        for name, a in sh.attributes.items():
+            a = np.asarray(a, np.float64)
+            a = a.reshape(len(a), -1)
+            rows = len(v) if name.startswith("vertex_") else len(keep)
+            if not name.startswith(("vertex_", "face_")) or len(a) != rows:
+                raise SceneError(f"{sh.where or sh.name}: mesh attribute {name!r} of shape "
+                                 f"{a.shape}: expected 'vertex_<name>' with {len(v)} rows or "
+                                 f"'face_<name>' with {len(keep)}.")  # fmt: skip
+            if name.startswith("face_"):
+                a = a[keep]  # the triangles the loader keeps
+            first = offset if name.startswith("vertex_") else n_faces
+            attrs.setdefault(name, []).append((si, first, a))
         f = f[keep].astype(np.int64)
         all_v.append(v)
         all_f.append(f + offset)
@@ -472,7 +491,25 @@ def assemble(
         camera_medium=camera_medium,
         vertex_normals=_attribute(normals, [s.normals for s in shapes], 3),
         vertex_uvs=_attribute(uvs, [s.uvs for s in shapes], 2),
+        mesh_attributes=_mesh_attributes(attrs, offset, n_faces),
     )
+
+
+def _mesh_attributes(attrs: dict, n_vertices: int, n_faces: int) -> dict[str, np.ndarray]:
+    """The shapes' mesh attributes merged over the scene's vertices or triangles (NaN rows
+    where a shape has none); all shapes' channels of one name must agree."""
+    out = {}
+    for name, parts in attrs.items():
+        dims = {a.shape[1] for _, _, a in parts}
+        if len(dims) > 1:
+            raise SceneError(f"mesh attribute {name!r} has {sorted(dims)} channels on different "
+                             "shapes; one name must have one channel count.")  # fmt: skip
+        rows = n_vertices if name.startswith("vertex_") else n_faces
+        merged = np.full((rows, dims.pop()), np.nan)
+        for _, first, a in parts:
+            merged[first : first + len(a)] = a
+        out[name] = merged
+    return out
 
 
 def _attribute(parts: list, given: list, cols: int) -> np.ndarray | None:

@@ -157,10 +157,64 @@ def _attribute(a, n: int, cols: int) -> np.ndarray | None:
     return a.reshape(n, cols) if a.size == n * cols else None
 
 
+# PLY properties that are a mesh's geometry, not one of its attributes.
+_PLY_GEOMETRY = frozenset(
+    {"x", "y", "z", "nx", "ny", "nz", "u", "v", "s", "t", "texture_u", "texture_v",
+     "vertex_indices", "vertex_index", "texcoord"}
+)  # fmt: skip
+# Suffix families of a multi-channel attribute's properties, in channel order.
+_PLY_SUFFIXES = (("r", "g", "b", "a"), ("x", "y", "z", "w"), ("u", "v"))
+
+
+def _ply_attributes(raw, n_vertices: int, n_faces: int) -> dict[str, np.ndarray]:
+    """Mitsuba's mesh attributes of a PLY file's elements (trimesh's `_ply_raw`):
+    `vertex_<name>` `(v, d)` and `face_<name>` `(f, d)` float64.
+
+    As Mitsuba's PLY reader: the properties `r g b` (or `red green blue`) are the attribute
+    `color`; properties `<name>_0`, `<name>_1`, ... (or `_r _g _b`, `_x _y _z`, `_u _v`) are
+    the channels of `<name>`; other properties are not attributes. Integer `color` channels
+    (8-bit vertex colours of scanners and MeshLab) are divided by their type's maximum, so
+    that colours lie in [0, 1] (Mitsuba reads them unscaled and warns). An element whose row
+    count differs from the mesh's (polygons split into triangles, vertices split at uv seams)
+    gives no attributes."""
+    out: dict[str, np.ndarray] = {}
+    for element, n in (("vertex", n_vertices), ("face", n_faces)):
+        el = (raw or {}).get(element)
+        if not el or el.get("data") is None:
+            continue
+        data = el["data"]
+        names = list(data.dtype.names if isinstance(data, np.ndarray) else data.keys())
+        groups: dict[str, list[tuple[str, str]]] = {}
+        for name in names:
+            if name in _PLY_GEOMETRY:
+                continue
+            if name in ("r", "g", "b", "red", "green", "blue"):
+                groups.setdefault("color", []).append((name[0], name))
+                continue
+            prefix, sep, suffix = name.rpartition("_")
+            if sep and prefix and (suffix.isdigit() or any(suffix in f for f in _PLY_SUFFIXES)):
+                groups.setdefault(prefix, []).append((suffix, name))
+        for prefix, channels in groups.items():
+            order = next((f for f in _PLY_SUFFIXES if all(c in f for c, _ in channels)), None)
+            rank = [order.index(c) if order else int(c, 36) for c, _ in channels]
+            columns = []
+            for _, (_, name) in sorted(zip(rank, channels, strict=True)):
+                col = np.asarray(data[name])
+                scale = 1.0
+                if prefix == "color" and np.issubdtype(col.dtype, np.integer):
+                    scale = float(np.iinfo(col.dtype).max)
+                columns.append(col.astype(np.float64).reshape(-1) / scale)
+            a = np.stack(columns, axis=1)
+            if len(a) == n:
+                out[f"{element}_{prefix}"] = a
+    return out
+
+
 def _load(path: Path, suffix: str):
-    """Vertices, faces, vertex normals and uvs (`None` when the file has none) of a mesh
-    file. OBJ and PLY go through trimesh's format readers directly: `trimesh.Trimesh` drops
-    file normals that disagree with its face normals, which Mitsuba keeps."""
+    """Vertices, faces, vertex normals and uvs (`None` when the file has none) and mesh
+    attributes (`_ply_attributes`; PLY only) of a mesh file. OBJ and PLY go through
+    trimesh's format readers directly: `trimesh.Trimesh` drops file normals that disagree
+    with its face normals, which Mitsuba keeps."""
     import trimesh
     from trimesh.exchange.obj import load_obj
     from trimesh.exchange.ply import load_ply
@@ -169,7 +223,7 @@ def _load(path: Path, suffix: str):
         mesh = trimesh.load(str(path), force="mesh", process=False)
         v = np.asarray(getattr(mesh, "vertices", np.zeros((0, 3))), dtype=np.float64)
         f = np.asarray(getattr(mesh, "faces", np.zeros((0, 3))), dtype=np.int64)
-        return v.reshape(-1, 3), f.reshape(-1, 3), None, None
+        return v.reshape(-1, 3), f.reshape(-1, 3), None, None, {}
     with open(path, "rb") as fh:
         if suffix == ".ply":
             parts = [load_ply(fh)]
@@ -185,16 +239,22 @@ def _load(path: Path, suffix: str):
         uvs.append(_attribute(getattr(g.get("visual"), "uv", None), len(v), 2))
         offset += len(v)
     if not vs:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), None, None
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), None, None, {}
     n = np.concatenate(ns) if all(x is not None for x in ns) else None
     uv = np.concatenate(uvs) if all(x is not None for x in uvs) else None
-    return np.concatenate(vs), np.concatenate(fs), n, uv
+    v, f = np.concatenate(vs), np.concatenate(fs)
+    attrs = {}
+    if suffix == ".ply":
+        attrs = _ply_attributes(parts[0].get("metadata", {}).get("_ply_raw"), len(v), len(f))
+    return v, f, n, uv, attrs
 
 
 def read_mesh(path: Path, where: str, *, attributes: bool = False):
     """Vertices `(v, 3)` float64 and faces `(f, 3)` int64 of a mesh file, checked; with
     `attributes`, also the file's vertex normals `(v, 3)` and uvs `(v, 2)` (`None` when the
-    file has none; OBJ and PLY only).
+    file has none; OBJ and PLY only) and its mesh attributes, a dict of `vertex_<name>`
+    `(v, d)` and `face_<name>` `(f, d)` arrays (PLY only, Mitsuba's naming:
+    `_ply_attributes`; non-finite values are refused).
 
     `where` prefixes every message (the scene file and line that names the mesh).
     """
@@ -221,7 +281,7 @@ def read_mesh(path: Path, where: str, *, attributes: bool = False):
         if _OBJ_ZERO_INDEX.search(data):
             raise _err(where, path, _obj_problem(data, None) or "a face index is 0.")
     try:
-        v, f, normals, uvs = _load(path, suffix)
+        v, f, normals, uvs, attrs = _load(path, suffix)
     except Exception as e:  # trimesh raises many types for a bad file
         detail = _obj_problem(data, None) if data is not None else None
         raise _err(
@@ -232,8 +292,13 @@ def read_mesh(path: Path, where: str, *, attributes: bool = False):
         raise _err(where, path, detail or "the file holds no triangles.")
     finite = np.isfinite(v).all(axis=1)
     in_range = ((f >= 0) & (f < len(v))).all(axis=1)
+    for name, a in attrs.items():
+        if not np.isfinite(a).all():
+            k = int(np.argmin(np.isfinite(a).all(axis=1)))
+            raise _err(where, path, f"attribute {name!r} has a non-finite value in row {k} "
+                       f"(0-based): {a[k].tolist()}.")  # fmt: skip
     if finite.all() and in_range.all():
-        return (v, f, normals, uvs) if attributes else (v, f)
+        return (v, f, normals, uvs, attrs) if attributes else (v, f)
     detail = _obj_problem(data, len(v)) if data is not None else None
     if detail is None and not finite.all():
         k = int(np.argmin(finite))

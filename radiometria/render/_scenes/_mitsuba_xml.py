@@ -453,7 +453,7 @@ _TYPES = {
                           "alpha_v", "temperature", "stddev", "B", "C", "lobes",
                           "focus_distance", "aperture_radius", "principal_point_offset_x",
                           "principal_point_offset_y", "scale")),
-    str: ("a <string>", ("fov_axis", "focal_length", "filename", "material", "distribution",
+    str: ("a <string>", ("fov_axis", "focal_length", "filename", "material", "distribution", "name",
                          "pixel_format", "component_format", "file_format")),
     bool: ("a <boolean>", ("flip_normals", "face_normals", "flip_tex_coords", "hide_emitters",
                            "sample_visible", "jitter", "compensate", "banner",
@@ -740,10 +740,10 @@ def _shape_mesh(ctx: _Ctx, node: _Node, kind: str, props: dict) -> ShapeMesh:
                 raise ctx.err(node, f"parameter 'shape_index' must be >= 0, got {index}")
             mesh, _ = read_serialized(path, loc, index)
         else:
-            v, f, n, uv = read_mesh(path, loc, attributes=True)
+            v, f, n, uv, attrs = read_mesh(path, loc, attributes=True)
             if uv is not None and kind == "obj" and props.get("flip_tex_coords", True):
                 uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=-1)  # Mitsuba's default
-            mesh = ShapeMesh(v, f, n, uv)
+            mesh = ShapeMesh(v, f, n, uv, attrs)
         if mesh.normals is not None:  # zero-length file normals: Mitsuba's would be NaN
             length = np.linalg.norm(mesh.normals, axis=1, keepdims=True)
             if not np.all(length > 0):
@@ -800,7 +800,7 @@ def _shape_list(
     name = node.attrib.get("id", f"instance@{node.line}")
     out = []
     for sh in groups[gid]:
-        mesh = ShapeMesh(sh.vertices, sh.faces, sh.normals, sh.uvs)
+        mesh = ShapeMesh(sh.vertices, sh.faces, sh.normals, sh.uvs, sh.attributes)
         try:
             mesh = _shapes.transform_mesh(mesh, m, dims=1)
         except ValueError as e:
@@ -863,7 +863,7 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
     name = node.attrib.get("id", f"{kind}@{node.line}")
     return ShapeDescription(
         name, mesh.vertices, mesh.faces, material, emitter, where=where, normals=mesh.normals,
-        uvs=mesh.uvs,
+        uvs=mesh.uvs, attributes=mesh.attributes,
     )  # fmt: skip
 
 

@@ -158,8 +158,7 @@ def read_serialized(path, where: str = "", shape_index: int = 0) -> tuple[ShapeM
     v = take(nv, dt, 3)
     normals = take(nv, dt, 3) if flags & _HAS_NORMALS else None
     uvs = take(nv, dt, 2) if flags & _HAS_UVS else None
-    if flags & _HAS_COLORS:
-        take(nv, dt, 3)
+    colors = take(nv, dt, 3) if flags & _HAS_COLORS else None
     f = take(nf, "<u4", 3)
     finite = np.isfinite(v).all(axis=1)
     if not finite.all():
@@ -172,4 +171,7 @@ def read_serialized(path, where: str = "", shape_index: int = 0) -> tuple[ShapeM
                   f"[0, {nv:,}).")  # fmt: skip
     if normals is not None and not np.isfinite(normals).all():
         raise err(f"mesh {shape_index} has a non-finite vertex normal.")
-    return ShapeMesh(v, f, normals, uvs), name
+    if colors is not None and not np.isfinite(colors).all():
+        raise err(f"mesh {shape_index} has a non-finite vertex colour.")
+    attributes = {} if colors is None else {"vertex_color": colors}  # Mitsuba's name
+    return ShapeMesh(v, f, normals, uvs, attributes), name

@@ -66,12 +66,15 @@ class ShapeMesh:
     - `faces`: `(f, 3)` int64 vertex indices; the winding sets the front side.
     - `normals`: `(v, 3)` unit shading normals, or `None` (the face normals shade).
     - `uvs`: `(v, 2)` texture coordinates, or `None`.
+    - `attributes`: Mitsuba's mesh attributes: `vertex_<name>` `(v, d)` and `face_<name>`
+        `(f, d)` arrays (e.g. `vertex_color`), read by `mesh_attribute` textures.
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     normals: np.ndarray | None = None
     uvs: np.ndarray | None = None
+    attributes: dict = dataclasses.field(default_factory=dict)
 
 
 def rectangle() -> ShapeMesh:
@@ -250,4 +253,4 @@ def transform_mesh(
         n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         normals = -n if flip_normals else n
     f = mesh.faces[:, [0, 2, 1]] if flip_normals else mesh.faces
-    return ShapeMesh(v, f, normals, mesh.uvs)
+    return ShapeMesh(v, f, normals, mesh.uvs, mesh.attributes)

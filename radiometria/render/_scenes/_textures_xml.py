@@ -1,4 +1,5 @@
-"""Mitsuba 3 XML textures: `<texture type="bitmap|checkerboard">` as a parameter of a BSDF,
+"""Mitsuba 3 XML textures: `<texture type="bitmap|checkerboard|mesh_attribute">` as a
+parameter of a BSDF,
 or at the top level with an `id` and used by `<ref name="..." id="..."/>` (thesis ch. 8).
 
 The loader (`_mitsuba_xml`) hands texture elements here; a texture becomes a `TextureSpec`
@@ -11,6 +12,8 @@ an error names the file, the line and the parameter.
   `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `raw` (no sRGB decoding of 8- and
   16-bit images), `to_uv`.
 - `checkerboard`: `color0`, `color1` (spectra: `rgb`, `spectrum`, `float`), `to_uv`.
+- `mesh_attribute`: `name` (`vertex_<name>` or `face_<name>`, an attribute of the shapes'
+  meshes: PLY properties and serialized vertex colours), `scale`; for BSDF parameters only.
 """
 
 from collections.abc import Callable
@@ -44,7 +47,26 @@ TEXTURED_PARAMETERS = frozenset(
 _TEXTURE_PARAMETERS = {
     "bitmap": {"filename", "filter_type", "wrap_mode", "raw", "to_uv"},
     "checkerboard": {"color0", "color1", "to_uv"},
+    "mesh_attribute": {"name", "scale"},
 }
+# Parameters whose textures are not looked up at hits through the hit's coordinates: a
+# mesh_attribute texture cannot serve them.
+_NOT_MESH_ATTRIBUTE = frozenset({("normalmap", "normalmap"), ("bumpmap", "texture")})
+
+
+def _check_kind(ctx, ch, parent, name: str, spec: TextureSpec) -> TextureSpec:
+    """`spec`, refused where its kind cannot serve the parameter: a mesh_attribute texture
+    for emission (the emitters sample points by their own uv) or a bump or normal map."""
+    kind = parent.attrib.get("type", "")
+    if spec.type == "mesh_attribute" and (
+        parent.tag != "bsdf" or (kind, name) in _NOT_MESH_ATTRIBUTE
+    ):
+        raise ctx.err(
+            ch, f"a mesh_attribute texture is not supported for parameter '{name}' of "
+            f"<{parent.tag} type='{kind}'> (line {ch.line}); it serves BSDF parameters "
+            "(not emitters, bumpmap or normalmap)"
+        )  # fmt: skip
+    return spec
 
 
 def _check_textured(ctx, ch, parent, name: str) -> None:
@@ -73,6 +95,14 @@ def texture_spec(ctx, node, properties: Callable) -> TextureSpec:
     to_uv = p.get("to_uv")
     if to_uv is not None and not np.all(np.isfinite(to_uv)):
         raise ctx.err(node, "to_uv must be finite")
+    if kind == "mesh_attribute":
+        attribute, scale = p.get("name"), p.get("scale", 1.0)
+        if not isinstance(attribute, str) or not attribute.startswith(("vertex_", "face_")):
+            raise ctx.err(node, f"a mesh_attribute texture needs a <string name='name'> that "
+                          f"starts with 'vertex_' or 'face_', got {attribute!r}")  # fmt: skip
+        if not isinstance(scale, float) or not np.isfinite(scale):
+            raise ctx.err(node, f"parameter 'scale' must be a finite <float>, got {scale!r}")
+        return TextureSpec("mesh_attribute", attribute=attribute, scale=scale, where=where)
     if kind == "checkerboard":
         colors = []
         for name, default in (("color0", 0.4), ("color1", 0.2)):
@@ -117,7 +147,7 @@ def texture_property(ctx, ch, parent, allowed: set, properties: Callable) -> tup
                       f"'{parent.attrib.get('type', '')}'> (line {ch.line}); supported: "
                       f"{sorted(allowed)}")  # fmt: skip
     _check_textured(ctx, ch, parent, name)
-    return name, texture_spec(ctx, ch, properties)
+    return name, _check_kind(ctx, ch, parent, name, texture_spec(ctx, ch, properties))
 
 
 def texture_ref_properties(ctx, node, ref: Callable) -> dict:
@@ -131,5 +161,5 @@ def texture_ref_properties(ctx, node, ref: Callable) -> dict:
             raise ctx.err(ch, "a <ref> inside a BSDF needs the 'name' of the parameter")
         name = ctx.attr(ch, "name")
         _check_textured(ctx, ch, node, name)
-        out[name] = ref(ctx, ch, "texture")
+        out[name] = _check_kind(ctx, ch, node, name, ref(ctx, ch, "texture"))
     return out

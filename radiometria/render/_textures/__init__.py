@@ -14,6 +14,7 @@ from ._image import (
     TextureFileError as TextureFileError,
     read_texture_image as read_texture_image,
 )
+from ._mesh_attribute import MeshAttributeTexture as MeshAttributeTexture
 from ._raw import RawImage as RawImage
 from ._spec import TextureSpec as TextureSpec, texture_parameter as texture_parameter
 from ._stack import TextureStack as TextureStack, concatenate_textures as concatenate_textures

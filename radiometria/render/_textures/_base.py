@@ -28,7 +28,9 @@ class AbstractTexture(eqx.Module):
         self,
         row: Int[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> Float[Array, "n k"]:
         """Values of row `row[i]` at the wavelengths of path `i` [nm] and its surface
-        coordinates `uv` (ignored by textures that do not vary over the surface)."""
+        coordinates `uv` (ignored by textures that do not vary over the surface): columns
+        0 and 1 are (u, v); a scene with mesh attributes adds the barycentrics and the
+        triangle's baked attributes after them (`RenderScene.surface_width`)."""

@@ -155,7 +155,7 @@ class BitmapTexture(AbstractTexture):
         self,
         row: Int[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> Float[Array, "n k"]:
         if uv is None:
             uv = jnp.zeros(wavelength_nm.shape[:-1] + (2,), wavelength_nm.dtype)

@@ -64,7 +64,7 @@ class CheckerboardTexture(AbstractTexture):
         self,
         row: Int[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> Float[Array, "n k"]:
         if uv is None:
             uv = jnp.zeros(wavelength_nm.shape[:-1] + (2,), wavelength_nm.dtype)

@@ -49,6 +49,6 @@ class ConstantTexture(AbstractTexture):
         self,
         row: Int[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> Float[Array, "n k"]:
         return self.table(row, wavelength_nm)

@@ -60,7 +60,7 @@ class RawImage(eqx.Module):
 
         return u, v, w, h, texel
 
-    def __call__(self, uv: Float[Array, "n 2"]) -> Float[Array, "n c"]:
+    def __call__(self, uv: Float[Array, "n _"]) -> Float[Array, "n c"]:
         """The texel values at `uv` [1]."""
         u, v, w, h, texel = self._setup(uv)
         if self.filter_type == "nearest":
@@ -73,7 +73,7 @@ class RawImage(eqx.Module):
         bottom = (1 - wx) * texel(i, j + 1) + wx * texel(i + 1, j + 1)
         return (1 - wy) * top + wy * bottom
 
-    def grad(self, uv: Float[Array, "n 2"]) -> Float[Array, "n c 2"]:
+    def grad(self, uv: Float[Array, "n _"]) -> Float[Array, "n c 2"]:
         """d(value)/d(u, v) at `uv` [1 per uv unit]."""
         u, v, w, h, texel = self._setup(uv)
         if self.filter_type == "nearest":

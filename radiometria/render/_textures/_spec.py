@@ -8,6 +8,7 @@ from .._spectral import SpectralValue
 from ._base import AbstractTexture
 from ._bitmap import BitmapTexture
 from ._checkerboard import CheckerboardTexture
+from ._mesh_attribute import MeshAttributeTexture
 
 __all__ = ["TextureSpec", "texture_parameter"]
 
@@ -19,13 +20,16 @@ class TextureSpec:
 
     **Fields:**
 
-    - `type`: `"bitmap"` or `"checkerboard"` (Mitsuba 3's texture plugins).
+    - `type`: `"bitmap"`, `"checkerboard"` or `"mesh_attribute"` (Mitsuba 3's texture
+        plugins).
     - `rgb`: `(h, w, 3)` linear texels of a bitmap (row 0 the top of the image), else `None`.
         [1, or the parameter's unit]
     - `colors`: a checkerboard's `(color0, color1)` spectral values, else `()`.
     - `filter_type`, `wrap_mode`: a bitmap's lookup (`"bilinear"`/`"nearest"`,
         `"repeat"`/`"mirror"`/`"clamp"`).
     - `to_uv`: `(4, 4)` or `(3, 3)` uv transform, or `None` (identity).
+    - `attribute`, `scale`: a mesh_attribute's attribute name (`vertex_<name>` or
+        `face_<name>`) and scale factor.
     - `where`: the file and line of the texture, for messages.
     """
 
@@ -35,6 +39,8 @@ class TextureSpec:
     filter_type: str = "bilinear"
     wrap_mode: str = "repeat"
     to_uv: np.ndarray | None = None
+    attribute: str = ""
+    scale: float = 1.0
     where: str = "scene"
 
 
@@ -55,6 +61,8 @@ def texture_parameter(value, rgb_spectrum: type, name: str, where: str) -> Abstr
             )
         if value.type == "checkerboard":
             return CheckerboardTexture.from_values(*value.colors, rgb_spectrum, to_uv=value.to_uv)
+        if value.type == "mesh_attribute":
+            return MeshAttributeTexture.from_name(value.attribute, rgb_spectrum, value.scale)
     except (ValueError, TypeError) as e:
         raise ValueError(f"{where}: parameter {name!r}, texture at {value.where}: {e}") from None
     raise ValueError(f"{where}: parameter {name!r}: unsupported texture type {value.type!r}.")

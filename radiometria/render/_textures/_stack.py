@@ -33,7 +33,7 @@ class TextureStack(AbstractTexture):
         self,
         row: Int[Array, " n"],
         wavelength_nm: Float[Array, "n k"],
-        uv: Float[Array, "n 2"] | None = None,
+        uv: Float[Array, "n _"] | None = None,
     ) -> Float[Array, "n k"]:
         part, local = self.part_of[row], self.row_of[row]
         out = self.parts[0](local, wavelength_nm, uv)
