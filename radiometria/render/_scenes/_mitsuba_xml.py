@@ -12,7 +12,9 @@ and rejects everything else with an error that names the file, the line and the 
 - file names (meshes, spectra, includes) resolve against the folder of the file that names
   them, then the `<path>` folders (the latest first), then the scene file's folder.
 - `shape`: `obj`, `ply` (`filename`; vertex normals and uvs kept, `flip_tex_coords` for
-  OBJ), `serialized` (`filename`, `shape_index`), `rectangle`, `disk`, `cube`, `cylinder`
+  OBJ; a PLY file's other properties become mesh attributes with Mitsuba's names:
+  `_mesh_files._ply_attributes`), `serialized` (`filename`, `shape_index`; vertex colours
+  become the attribute `vertex_color`), `rectangle`, `disk`, `cube`, `cylinder`
   (`radius`, `p0`, `p1`), `sphere` (`center`, `radius`), tessellated with Mitsuba's
   parametrisation as described in `radiometria.render._scenes._shapes`; `to_world`,
   `flip_normals` on all, `face_normals` on meshes, cylinders and spheres (without it, a mesh
@@ -44,8 +46,10 @@ and rejects everything else with an error that names the file, the line and the 
   `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color`
   and every scalar Mitsuba reads as a texture (`roughness`, `metallic`, `spec_trans`,
   `diff_trans`, ...; a thin sheet's `eta` too, not the principled `eta` or `specular`).
-  Scalar parameters (roughness, weight, opacity) use the texels'
-  luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables depend on it).
+  Each takes a `bitmap` or `checkerboard`; BSDF parameters also a `mesh_attribute` (`name`
+  `vertex_<name>` or `face_<name>`, `scale`). Scalar parameters (roughness, weight, opacity)
+  use the texels' luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables
+  depend on it).
 - `sensor`: `perspective` with `fov` and `fov_axis`, or `focal_length` (35 mm equivalent,
   diagonal, as Mitsuba), `to_world`, `near_clip`, `far_clip`; `thinlens` with those and
   `aperture_radius` (required), `focus_distance`; `orthographic` (`to_world`, whose scale sets
