@@ -17,6 +17,7 @@ from ._path import (
     path_radiance,
     sample_dimensions,
     shading_frame,
+    shadow_ray,
 )
 
 _SEGMENTS = 2  # the camera segment and one scattering vertex's light and BSDF samples
@@ -100,8 +101,8 @@ def direct_radiance(
         if ls.delta is not None:  # no BSDF sample finds a delta light
             w = jnp.where(ls.delta, 1.0, w)
         use = scatters & (ls.pdf > 0)
-        tmax = jnp.where(use, ls.dist * (1.0 - 1e-4) - offset, 0.0)
-        use = use & ~scene.accelerator.intersect_any(_offset(v.p, v.n, ls.wi, offset), ls.wi, tmax)
+        origin, direction, tmax = shadow_ray(v.p, v.n, ls.wi, ls.dist, offset)
+        use = use & ~scene.accelerator.intersect_any(origin, direction, jnp.where(use, tmax, 0.0))
         c = f * ls.radiance * (w / (m * jnp.where(use, ls.pdf, 1.0)))[:, None]
         return total + jnp.where(use[:, None], c, 0.0), None
 

@@ -93,6 +93,27 @@ def _offset(p, n, w, scale):
     return p + (side * scale)[..., None] * n
 
 
+def shadow_ray(p, n, wi, dist, scale):
+    """`(origin, direction, tmax)` of the shadow ray from a surface point `p` (normal `n`) to
+    the point `p + dist wi` (`dist` [scene units], infinite for a light at infinity).
+
+    The origin moves off the surface by `scale` along `n` (`_offset`), and the ray is aimed
+    from there at the target, ending a relative 1e-4 short of it (pbrt-v4's `SpawnRayTo`).
+    Keeping the direction `wi` from the moved origin would shift the ray parallel to itself,
+    and where the target's surface is oblique to it (points near a curved emitter's
+    silhouette) the shifted ray meets that surface before `tmax`: the sample would be
+    counted as occluded by its own emitter, darkening next-event estimation (by 9 % under a
+    sphere light, measured against its closed-form irradiance in the tests). `scale` may be
+    0 (a point in a medium: no surface to leave)."""
+    origin = _offset(p, n, wi, scale)
+    finite = jnp.isfinite(dist)
+    target = p + wi * jnp.where(finite, dist, 0.0)[:, None]
+    d = target - origin
+    length = jnp.sqrt(jnp.maximum(dot(d, d), jnp.finfo(p.dtype).tiny))
+    direction = jnp.where(finite[:, None], d / length[:, None], wi)
+    return origin, direction, jnp.where(finite, length * (1.0 - 1e-4), jnp.inf)
+
+
 class _Vertex(eqx.Module):
     """A surface hit of a batch of rays (arrays of shape (n,) / (n, 3))."""
 
@@ -441,9 +462,9 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     if ls.delta is not None:  # a delta light (point, spot, directional): no BSDF sample finds it
         w_light = jnp.where(ls.delta, 1.0, w_light)
     use = alive & (ls.pdf > 0)
-    shadow_tmax = jnp.where(use, ls.dist * (1.0 - 1e-4) - offset, 0.0)
-    origin = _offset(v.p, v.n, ls.wi, offset)
-    use = use & ~scene.accelerator.intersect_any(origin, ls.wi, shadow_tmax)
+    origin, direction, shadow_tmax = shadow_ray(v.p, v.n, ls.wi, ls.dist, offset)
+    shadow_tmax = jnp.where(use, shadow_tmax, 0.0)
+    use = use & ~scene.accelerator.intersect_any(origin, direction, shadow_tmax)
     nee = beta * f_light * ls.radiance * (w_light / jnp.where(use, ls.pdf, 1.0))[:, None]
     radiance = radiance + jnp.where(use[:, None], nee, 0.0)
 

@@ -71,7 +71,7 @@ from jaxtyping import Array, Bool, Float
 from ..._math import dot
 from ...scattering import coordinate_system
 from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
-from ._path import _offset, _vertex
+from ._path import _offset, _vertex, shadow_ray
 
 __all__ = ["PTracer", "Splats", "ptracer_sample_dimensions"]
 
@@ -188,18 +188,18 @@ class PTracer(AbstractIntegrator):
         def scale_of(p):
             return scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(p), axis=-1))
 
-        def visible(p, normal, cs):
-            offset = scale_of(p)
-            origin = jnp.where(has_n[:, None], _offset(p, normal, cs.wi, offset), p)
-            tmax = jnp.where(cs.valid, cs.dist * (1.0 - 1e-4) - offset, 0.0)
-            return cs.valid & ~scene.accelerator.intersect_any(origin, cs.wi, tmax)
+        def visible(p, normal, cs, surface):
+            offset = jnp.where(surface, scale_of(p), 0.0)  # a delta light's point: no surface
+            origin, direction, tmax = shadow_ray(p, normal, cs.wi, cs.dist, offset)
+            tmax = jnp.where(cs.valid, tmax, 0.0)
+            return cs.valid & ~scene.accelerator.intersect_any(origin, direction, tmax)
 
         # Depth 0: the emitter's own point seen by the camera (not for delta lights).
         cs = camera.sample_wi(es.p)
         cos_l = jnp.abs(dot(es.n, cs.wi))
         v0 = es.le_observer * (cos_l * cs.importance / jnp.where(cs.valid, cs.pdf, 1.0))[:, None]
         v0 = v0 / pdf_pos[:, None]
-        ok0 = ok & has_n & visible(es.p, es.n, cs) & (not self.hide_emitters)
+        ok0 = ok & has_n & visible(es.p, es.n, cs, has_n) & (not self.hide_emitters)
         first = Splats(raster=cs.raster, value=jnp.where(ok0[:, None], v0, 0.0), valid=ok0)
 
         cos_d = jnp.where(has_n, jnp.abs(dot(es.n, es.d)), 1.0)
@@ -247,7 +247,7 @@ class PTracer(AbstractIntegrator):
             value = beta * f * g[:, None]
             hero = jnp.zeros((1, k), dtype).at[0, 0].set(k)
             value = jnp.where(hero_only[:, None], value[:, :1] * hero, value)
-            seen = alive & visible(v.p, v.n, cs)
+            seen = alive & visible(v.p, v.n, cs, True)
             splat = Splats(cs.raster, jnp.where(seen[:, None], value, 0.0), seen)
 
             # The next segment: BSDF sample in importance mode, then roulette.

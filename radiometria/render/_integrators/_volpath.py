@@ -86,6 +86,7 @@ from ._path import (
     _Vertex,
     _vertex,
     shading_frame,
+    shadow_ray,
 )
 from ._segments import run_segments
 
@@ -400,19 +401,21 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
         w_light = jnp.where(ls.delta, 1.0, w_light)
     use = alive & (ls.pdf > 0)
     if media is None and max_null == 1:
-        shadow_tmax = jnp.where(use, ls.dist * (1.0 - 1e-4) - offset, 0.0)
-        origin = _offset(p, ng, ls.wi, offset)
-        use = use & ~scene.accelerator.intersect_any(origin, ls.wi, shadow_tmax)
+        origin, direction, shadow_tmax = shadow_ray(p, ng, ls.wi, ls.dist, offset)
+        shadow_tmax = jnp.where(use, shadow_tmax, 0.0)
+        use = use & ~scene.accelerator.intersect_any(origin, direction, shadow_tmax)
         tr = jnp.ones_like(beta)
     else:
-        origin = jnp.where(in_medium[:, None], p, _offset(p, ng, ls.wi, offset))
         dist = jnp.where(jnp.isfinite(ls.dist), ls.dist, 1e30)  # lights at infinity
-        shadow_tmax = jnp.where(use, dist * (1.0 - 1e-4) - jnp.where(in_medium, 0, offset), 0.0)
+        origin, direction, shadow_tmax = shadow_ray(
+            p, ng, ls.wi, dist, jnp.where(in_medium, 0.0, offset)
+        )
+        shadow_tmax = jnp.where(use, shadow_tmax, 0.0)
         start = walk.medium
         if media is not None:
             start = jnp.where(in_medium, start, _crossed(scene, face, ls.wi, start))
         tr = _shadow_transmittance(
-            scene, origin, ls.wi, shadow_tmax, start, wavelength_nm, seed_u,
+            scene, origin, direction, shadow_tmax, start, wavelength_nm, seed_u,
             max_null=max_null, differentiable=differentiable,
         )  # fmt: skip
     nee = beta * f_light * ls.radiance * tr * (w_light / jnp.where(use, ls.pdf, 1.0))[:, None]
