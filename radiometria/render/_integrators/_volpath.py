@@ -406,11 +406,11 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
         use = use & ~scene.accelerator.intersect_any(origin, direction, shadow_tmax)
         tr = jnp.ones_like(beta)
     else:
-        dist = jnp.where(jnp.isfinite(ls.dist), ls.dist, 1e30)  # lights at infinity
         origin, direction, shadow_tmax = shadow_ray(
-            p, ng, ls.wi, dist, jnp.where(in_medium, 0.0, offset)
+            p, ng, ls.wi, ls.dist, jnp.where(in_medium, 0.0, offset)
         )
-        shadow_tmax = jnp.where(use, shadow_tmax, 0.0)
+        # a light at infinity: an unbounded segment, as a finite length for the walk
+        shadow_tmax = jnp.where(use, jnp.minimum(shadow_tmax, 1e30), 0.0)
         start = walk.medium
         if media is not None:
             start = jnp.where(in_medium, start, _crossed(scene, face, ls.wi, start))
