@@ -63,6 +63,7 @@ def pixel_z_test(
     required_fraction: float = 0.9975,
     variance_floor: float = 1e-4,
     n_worst: int = 5,
+    image_variance=None,
 ) -> ZTestResult:
     r"""Per-pixel two-sided z-test of `image` (an `spp`-sample estimate) against `reference`.
 
@@ -75,8 +76,12 @@ def pixel_z_test(
     radiance, not of the mean), $n$ = `spp` and $1/n_\mathrm{ref}$ is dropped when
     `reference_spp` is None (Mitsuba's form: its references use 32000 spp). The variance of the
     image under test is taken to be the reference's per-sample variance, so both renderers must
-    estimate the same quantity with comparable noise. Pixel channel passes when $p > \alpha$,
-    $\alpha = 1 - (1 - \text{level})^{1/N_\mathrm{pixels}}$ (the Sidak correction for
+    estimate the same quantity with comparable noise. Where they do not (another light
+    sampling strategy, say), give `image_variance`, the image's own per-sample variance
+    $\sigma^2_\mathrm{img}$: the test becomes the two-sample (Welch) z-test,
+    $z = |I - I_\mathrm{ref}| / \sqrt{\max(\sigma^2_\mathrm{img}, \sigma^2_\mathrm{floor})/n
+    + \max(\sigma^2, \sigma^2_\mathrm{floor})/n_\mathrm{ref}}$. Pixel channel passes when
+    $p > \alpha$, $\alpha = 1 - (1 - \text{level})^{1/N_\mathrm{pixels}}$ (the Sidak correction for
     $N_\mathrm{pixels}$ tests), and the image passes when at least `required_fraction` of its
     pixel channels pass.
 
@@ -93,6 +98,9 @@ def pixel_z_test(
     - `variance_floor`: lower bound on the variance (noise-free pixels would otherwise demand
         exact equality). [unit^2]
     - `n_worst`: how many of the worst pixel channels to report.
+    - `image_variance`: the image's own per-sample variance, same shape (e.g. `spp` times the
+        variance of the means of independent renders), for the two-sample test; needs
+        `reference_spp`. None (default): Mitsuba's test. [unit^2]
 
     **Returns:**
 
@@ -139,8 +147,21 @@ def pixel_z_test(
         )
 
     n_pixels = ours.shape[0] * ours.shape[1]
-    inv_n = 1.0 / spp + (0.0 if reference_spp is None else 1.0 / reference_spp)
-    sigma_mean = np.sqrt(np.maximum(var, variance_floor) * inv_n)
+    if image_variance is None:
+        inv_n = 1.0 / spp + (0.0 if reference_spp is None else 1.0 / reference_spp)
+        sigma_mean = np.sqrt(np.maximum(var, variance_floor) * inv_n)
+    else:
+        own = np.asarray(image_variance, np.float64)
+        if own.shape != ours.shape or not np.all(np.isfinite(own) & (own >= 0)):
+            raise ValueError(
+                f"`image_variance` must be finite, >= 0 and of the image's shape {ours.shape}; "
+                f"got shape {own.shape}."
+            )
+        if reference_spp is None:
+            raise ValueError("`image_variance` (the two-sample test) needs `reference_spp`.")
+        sigma_mean = np.sqrt(
+            np.maximum(own, variance_floor) / spp + np.maximum(var, variance_floor) / reference_spp
+        )
     z = np.abs(ours - ref) / sigma_mean
     # erfc keeps tiny p-values accurate where 1 - Phi(z) would round to 0.
     p = np.asarray(jsp.erfc(jnp.asarray(z / math.sqrt(2.0))), np.float64)
@@ -165,7 +186,8 @@ def pixel_z_test(
         f"{idx}: ours {o:.6g} ref {r:.6g} var {v:.3g} p {pv:.3g}" for idx, o, r, v, pv in worst
     )
     message = (
-        f"pixel z-test {'passed' if passed else 'FAILED'}: {fraction:.4%} of {ok.size} pixel "
+        f"{'two-sample ' if image_variance is not None else ''}pixel z-test "
+        f"{'passed' if passed else 'FAILED'}: {fraction:.4%} of {ok.size} pixel "
         f"channels have p > alpha = {alpha:.3g} (Sidak, level {significance_level} over "
         f"{n_pixels} pixels; need {required_fraction:.2%}); spp {spp}, reference spp "
         f"{reference_spp}; mean signed difference {float(np.nanmean(ours - ref)):.4g}. "

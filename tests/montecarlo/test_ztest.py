@@ -58,6 +58,30 @@ def test_bias_in_one_percent_of_the_pixels_fails():
     assert {w[0][:2] for w in res.worst} <= {(i, j) for i in range(10, 13) for j in range(20, 23)}
 
 
+def test_two_sample_test_for_an_image_noisier_than_its_reference():
+    """An unbiased image with 20x the reference's per-sample variance (another sampling
+    strategy) fails Mitsuba's one-sample test, which assumes equal noise, and passes the
+    two-sample test given its own variance, estimated from 16 independent renders as a
+    renderer would; the same image 5 % too bright fails the two-sample test too."""
+    truth = _truth()
+    ref_var = np.full(SHAPE, SIGMA**2)
+    ref = _estimate(truth, 65536, 7)
+    noisy = 20.0 * SIGMA**2  # the image's per-sample variance
+    renders = np.stack([
+        truth + np.random.default_rng(50 + k).normal(0.0, np.sqrt(noisy / 256), SHAPE)
+        for k in range(16)
+    ])  # fmt: skip
+    ours, own = renders.mean(axis=0), 256 * renders.var(axis=0, ddof=1)
+    spp = 16 * 256
+    assert not pixel_z_test(ours, ref, ref_var, spp, 65536).passed
+    res = pixel_z_test(ours, ref, ref_var, spp, 65536, image_variance=own)
+    assert res.passed and res.message.startswith("two-sample"), res.message
+    expected = np.sqrt(own / spp + ref_var / 65536)
+    np.testing.assert_allclose(res.z, np.abs(ours - ref) / expected, rtol=1e-12)
+    biased = pixel_z_test(1.05 * ours, ref, ref_var, spp, 65536, image_variance=own)
+    assert not biased.passed, biased.message
+
+
 def test_p_values_and_level_match_scipy():
     rng = np.random.default_rng(5)
     ours, ref = rng.uniform(0, 1, (2, 8, 8, 3))
@@ -95,6 +119,8 @@ def test_nan_pixels_fail_and_grey_images_work():
         ({"spp": 0}, ValueError, "spp"),
         ({"significance_level": 1.0}, ValueError, "significance_level"),
         ({"image": np.zeros(4)}, ValueError, "image"),
+        ({"image_variance": np.ones((4, 4, 2))}, ValueError, "image_variance"),
+        ({"image_variance": np.ones((4, 4, 3))}, ValueError, "needs `reference_spp`"),
     ],
 )
 def test_bad_input_is_named(kwargs, error, match):
