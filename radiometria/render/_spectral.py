@@ -37,6 +37,7 @@ from ..upsampling import (
 
 __all__ = [
     "N_HERO_WAVELENGTHS",
+    "RGB_LUMINANCE",
     "LinearRGB",
     "SpectrumTable",
     "sample_hero_wavelengths",
@@ -45,6 +46,9 @@ __all__ = [
 ]
 
 N_HERO_WAVELENGTHS = 4  # wavelengths carried by one path (PBRT's NSpectrumSamples, Mitsuba's)
+# Y of linear sRGB (Rec. 709 primaries, D65), as Mitsuba's `luminance()`: how scalar
+# parameters read colour textures (Mitsuba's `eval_1`).
+RGB_LUMINANCE = np.array([0.212671, 0.715160, 0.072169])
 _GRID_STEP_NM = 1.0
 
 

@@ -20,7 +20,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import BlendBxDF, MaskBxDF
 from ...upsampling import RGBAlbedoSpectrum
-from .._spectral import LinearRGB
+from .._spectral import RGB_LUMINANCE, LinearRGB
 from .._textures import (
     AbstractTexture,
     ConstantTexture,
@@ -33,8 +33,6 @@ from ._base import AbstractMaterial, Properties, unknown_parameters
 from ._set import MaterialSet
 
 __all__ = ["BlendBSDF", "Mask", "scalar_texture"]
-
-_LUMINANCE = np.array([0.212671, 0.715160, 0.072169])  # Rec. 709 Y of linear sRGB
 
 
 def scalar_texture(
@@ -50,14 +48,15 @@ def scalar_texture(
         if value.type == "mesh_attribute":
             return MeshAttributeTexture.from_name(value.attribute, None, value.scale)
         if value.type == "bitmap":
-            y = np.clip(value.rgb @ _LUMINANCE, lower, upper)
+            y = np.clip(value.rgb @ RGB_LUMINANCE, lower, upper)
             value = TextureSpec(
                 "bitmap", rgb=np.repeat(y[..., None], 3, axis=2), filter_type=value.filter_type,
                 wrap_mode=value.wrap_mode, to_uv=value.to_uv, where=value.where,
             )  # fmt: skip
         else:
             colors = tuple(
-                float(c.rgb @ _LUMINANCE) if isinstance(c, LinearRGB) else c for c in value.colors
+                float(c.rgb @ RGB_LUMINANCE) if isinstance(c, LinearRGB) else c
+                for c in value.colors
             )
             for c in colors:
                 if not isinstance(c, float) or not lower <= c <= upper:

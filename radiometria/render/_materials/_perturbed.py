@@ -28,14 +28,13 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ..._math import dot, safe_div
 from ...scattering import AbstractBxDF, BSDFSample
+from .._spectral import RGB_LUMINANCE
 from .._textures import RawImage, TextureSpec
 from ._base import AbstractMaterial, Properties, scalar, unknown_parameters
 from ._composite import _nested
 from ._set import MaterialSet
 
 __all__ = ["BumpMap", "HitGeometry", "NormalMap", "PerturbedBxDF"]
-
-_LUMINANCE = np.array([0.212671, 0.715160, 0.072169])
 
 
 class HitGeometry(eqx.Module):
@@ -144,7 +143,7 @@ def _image(value, name: str, where: str, grey: bool) -> RawImage:
     if not isinstance(value, TextureSpec) or value.type != "bitmap":
         raise ValueError(f"{where}: parameter {name!r} must be a bitmap texture, got {value!r}.")
     rgb = np.asarray(value.rgb, np.float64)
-    values = (rgb @ _LUMINANCE)[..., None] if grey else rgb
+    values = (rgb @ RGB_LUMINANCE)[..., None] if grey else rgb
     return RawImage.from_array(
         values, filter_type=value.filter_type, wrap_mode=value.wrap_mode, to_uv=value.to_uv
     )

@@ -19,6 +19,7 @@ from ...upsampling import (
     get_lut,
     sigmoid_polynomial_jakob2019,
 )
+from .._spectral import RGB_LUMINANCE
 from ._base import AbstractTexture
 
 __all__ = [
@@ -37,7 +38,6 @@ HIT_COLUMNS = 4
 # value is stored as (0, 0, _GREY) with the value as the scale.
 _GREY = 1e8
 _SPECTRA = {RGBAlbedoSpectrum: "albedo", RGBUnboundedSpectrum: "unbounded", None: "scalar"}
-_LUMINANCE = np.array([0.212671, 0.715160, 0.072169])  # Rec. 709 Y of linear sRGB
 SPECTRUM_KINDS = ("albedo", "unbounded", "scalar")
 
 
@@ -56,7 +56,7 @@ def corner_spectra(values, spectrum: str) -> np.ndarray:
     """
     x = np.asarray(values, np.float64)
     if spectrum == "scalar" and x.shape[-1] == 3:
-        x = x @ _LUMINANCE[:, None]
+        x = x @ RGB_LUMINANCE[:, None]
     if x.shape[-1] == 1:
         coeffs = np.zeros(x.shape[:-1] + (3,))
         coeffs[..., 2] = _GREY
