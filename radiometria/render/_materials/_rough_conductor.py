@@ -90,7 +90,7 @@ class RoughConductor(AbstractMaterial):
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
     ) -> ScaledBxDF:
         refl = self.specular_reflectance(row, wavelength_nm, uv)
-        eta, k = valid_ior(self.eta(row, wavelength_nm), self.k(row, wavelength_nm))
+        eta, k = valid_ior(self.eta(row, wavelength_nm, uv), self.k(row, wavelength_nm, uv))
         alpha_u, alpha_v = (
             jnp.maximum(a(row, wavelength_nm, uv)[..., 0], 1e-4)
             for a in (self.alpha_u, self.alpha_v)

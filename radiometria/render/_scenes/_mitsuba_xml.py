@@ -41,8 +41,9 @@ and rejects everything else with an error that names the file, the line and the 
   or checkerboard, `scale`, `fov`/`fov_axis` or `focal_length`, a rigid `to_world`).
 - Textures (`_textures_xml.TEXTURED_PARAMETERS`): `diffuse` `reflectance`; `plastic` and
   `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
-  `roughconductor` `specular_reflectance`; `roughconductor` and `roughdielectric` `alpha`,
-  `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`; `normalmap`, `bumpmap`;
+  `roughconductor` `specular_reflectance`, `eta`, `k`; `roughconductor` and
+  `roughdielectric` `alpha`, `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`;
+  `normalmap`, `bumpmap`;
   `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color`
   and every scalar Mitsuba reads as a texture (`roughness`, `metallic`, `spec_trans`,
   `diff_trans`, ...; a thin sheet's `eta` too, not the principled `eta` or `specular`).

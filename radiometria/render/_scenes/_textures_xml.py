@@ -31,8 +31,9 @@ TEXTURED_PARAMETERS = frozenset(
     {("diffuse", "reflectance"), ("blendbsdf", "weight"), ("mask", "opacity"),
      ("normalmap", "normalmap"), ("bumpmap", "texture"), ("spot", "texture"),
      ("area", "radiance"), ("projector", "irradiance"),
-     ("conductor", "specular_reflectance")}
-    | {("roughconductor", n) for n in ("specular_reflectance", "alpha", "alpha_u", "alpha_v")}
+     ("conductor", "specular_reflectance"), ("conductor", "eta"), ("conductor", "k")}
+    | {("roughconductor", n) for n in ("specular_reflectance", "alpha", "alpha_u", "alpha_v",
+                                        "eta", "k")}
     | {("roughdielectric", n) for n in ("alpha", "alpha_u", "alpha_v")}
     | {(p, n) for p in ("plastic", "roughplastic")
        for n in ("diffuse_reflectance", "specular_reflectance")}
