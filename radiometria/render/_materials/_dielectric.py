@@ -6,20 +6,23 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import DielectricBxDF
-from ...upsampling import RGBUnboundedSpectrum
+from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import SpectrumTable
-from .._textures import AbstractTexture, ConstantTexture
+from .._textures import AbstractTexture, ConstantTexture, texture_parameter
 from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
 from ._ior import dielectric_ior
 
 
-def dielectric_textures(params: Properties, where: str) -> tuple[ConstantTexture, ...]:
-    """`(eta, specular_reflectance, specular_transmittance)` textures of one dielectric."""
+def dielectric_textures(params: Properties, where: str) -> tuple[AbstractTexture, ...]:
+    """`(eta, specular_reflectance, specular_transmittance)` textures of one dielectric; the
+    two lobe factors may be textures (bitmap, checkerboard, mesh attribute), upsampled as
+    bounded reflectances, as Mitsuba's bitmaps are."""
     eta = ConstantTexture(
         SpectrumTable(jnp.asarray(dielectric_ior(params, where)[None], jnp.float32))
     )
     factors = [
-        ConstantTexture.from_values([params.get(name, 1.0)], RGBUnboundedSpectrum)
+        texture_parameter(params.get(name), RGBAlbedoSpectrum, name, where)
+        or ConstantTexture.from_values([params.get(name, 1.0)], RGBUnboundedSpectrum)
         for name in ("specular_reflectance", "specular_transmittance")
     ]
     return eta, *factors
@@ -34,6 +37,7 @@ class _AbstractSmoothDielectric(AbstractMaterial):
         {"int_ior", "ext_ior", "specular_reflectance", "specular_transmittance"}
     )
     TRANSMISSIVE: ClassVar[bool] = True
+    USES_UV: ClassVar[bool] = True
     ALWAYS_TWO_SIDED: ClassVar[bool] = False
     eta: AbstractTexture
     specular_reflectance: AbstractTexture
@@ -68,10 +72,12 @@ class Dielectric(_AbstractSmoothDielectric):
 
     NAME: ClassVar[str] = "dielectric"
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> ScaledBxDF:
+    def bxdf(
+        self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
+    ) -> ScaledBxDF:
         eta = jnp.maximum(self.eta(row, wavelength_nm), 1e-3)
         return ScaledBxDF(
             DielectricBxDF(eta),
-            self.specular_reflectance(row, wavelength_nm),
-            self.specular_transmittance(row, wavelength_nm),
+            self.specular_reflectance(row, wavelength_nm, uv),
+            self.specular_transmittance(row, wavelength_nm, uv),
         )

@@ -69,8 +69,8 @@ class RoughDielectric(AbstractMaterial):
             RoughDielectricBxDF(
                 alpha_u, eta, alpha_v, distribution=self.DISTRIBUTION, masking="separable"
             ),
-            self.specular_reflectance(row, wavelength_nm),
-            self.specular_transmittance(row, wavelength_nm),
+            self.specular_reflectance(row, wavelength_nm, uv),
+            self.specular_transmittance(row, wavelength_nm, uv),
         )
 
 

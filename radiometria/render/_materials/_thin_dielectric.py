@@ -31,9 +31,9 @@ class ThinDielectric(_AbstractSmoothDielectric):
     NAME: ClassVar[str] = "thindielectric"
     ALWAYS_TWO_SIDED: ClassVar[bool] = True
 
-    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]):
+    def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None):
         return ThinDielectricBxDF(
             jnp.maximum(self.eta(row, wavelength_nm), 1e-3),
-            self.specular_reflectance(row, wavelength_nm),
-            self.specular_transmittance(row, wavelength_nm),
+            self.specular_reflectance(row, wavelength_nm, uv),
+            self.specular_transmittance(row, wavelength_nm, uv),
         )

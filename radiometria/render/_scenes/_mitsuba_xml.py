@@ -42,7 +42,9 @@ and rejects everything else with an error that names the file, the line and the 
 - Textures (`_textures_xml.TEXTURED_PARAMETERS`): `diffuse` `reflectance`; `plastic` and
   `roughplastic` `diffuse_reflectance`, `specular_reflectance`; `conductor` and
   `roughconductor` `specular_reflectance`, `eta`, `k`; `roughconductor` and
-  `roughdielectric` `alpha`, `alpha_u`, `alpha_v`; `blendbsdf` `weight`; `mask` `opacity`;
+  `roughdielectric` `alpha`, `alpha_u`, `alpha_v`; `dielectric`, `roughdielectric` and
+  `thindielectric` `specular_reflectance`, `specular_transmittance`; `blendbsdf` `weight`;
+  `mask` `opacity`;
   `normalmap`, `bumpmap`;
   `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color`
   and every scalar Mitsuba reads as a texture (`roughness`, `metallic`, `spec_trans`,

@@ -35,6 +35,8 @@ TEXTURED_PARAMETERS = frozenset(
     | {("roughconductor", n) for n in ("specular_reflectance", "alpha", "alpha_u", "alpha_v",
                                         "eta", "k")}
     | {("roughdielectric", n) for n in ("alpha", "alpha_u", "alpha_v")}
+    | {(p, n) for p in ("dielectric", "roughdielectric", "thindielectric")
+       for n in ("specular_reflectance", "specular_transmittance")}
     | {(p, n) for p in ("plastic", "roughplastic")
        for n in ("diffuse_reflectance", "specular_reflectance")}
     | {("principled", n) for n in ("base_color", "roughness", "anisotropic", "metallic",
