@@ -44,11 +44,10 @@ and rejects everything else with an error that names the file, the line and the 
   `roughconductor` `specular_reflectance`, `eta`, `k`; `roughconductor` and
   `roughdielectric` `alpha`, `alpha_u`, `alpha_v`; `dielectric`, `roughdielectric` and
   `thindielectric` `specular_reflectance`, `specular_transmittance`; `blendbsdf` `weight`;
-  `mask` `opacity`;
-  `normalmap`, `bumpmap`;
-  `spot` `texture`; `projector` `irradiance`; `principled` and `principledthin` `base_color`
-  and every scalar Mitsuba reads as a texture (`roughness`, `metallic`, `spec_trans`,
-  `diff_trans`, ...; a thin sheet's `eta` too, not the principled `eta` or `specular`).
+  `mask` `opacity`; `normalmap`, `bumpmap`; `spot` `texture`; `projector` `irradiance`;
+  `principled` and `principledthin` `base_color` and every scalar Mitsuba reads as a
+  texture (`roughness`, `metallic`, `spec_trans`, `diff_trans`, ...; a thin sheet's `eta`
+  too, not the principled `eta` or `specular`).
   Each takes a `bitmap` or `checkerboard`; BSDF parameters also a `mesh_attribute` (`name`
   `vertex_<name>` or `face_<name>`, `scale`). Scalar parameters (roughness, weight, opacity)
   use the texels' luminance; Mitsuba's `roughplastic` `alpha` is a number only (its tables
