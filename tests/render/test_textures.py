@@ -329,10 +329,10 @@ def test_texture_where_none_is_supported_is_named(tmp_path):
     text = text.replace('<ref name="radiance" id="chk"/>', '<rgb name="radiance" value="1"/>')
     text = text.replace(
         '<bsdf type="diffuse"><ref name="reflectance" id="chk"/></bsdf>',
-        '<bsdf type="conductor"><ref name="eta" id="chk"/></bsdf>',
-    )
+        '<bsdf type="dielectric"><ref name="int_ior" id="chk"/></bsdf>',
+    )  # Mitsuba's int_ior is a number (a conductor's eta and k are textures, as in Mitsuba)
     (tmp_path / "scene.xml").write_text(text)
-    with pytest.raises(SceneError, match="a texture is not supported for parameter 'eta'"):
+    with pytest.raises(SceneError, match="a texture is not supported for parameter 'int_ior'"):
         load_scene(tmp_path / "scene.xml")
 
 
