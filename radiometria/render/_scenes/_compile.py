@@ -297,7 +297,7 @@ def _mesh_attributes(description: SceneDescription, materials: list) -> tuple[li
             ),
             m,
             is_leaf=_is_attribute_texture,
-        )  # fmt: skip
+        )
         for m in materials
     ]
     faces = np.asarray(description.faces, np.int64)
