@@ -127,9 +127,12 @@ class _Vertex(eqx.Module):
     ns: Array  # shading normal: interpolated vertex normals (RenderScene.shading_normal), or n
 
 
-def _vertex(scene: RenderScene, origins, directions) -> _Vertex:
+def _vertex(scene: RenderScene, origins, directions, tmax=None) -> _Vertex:
+    """The closest hit of each ray (unbounded, or within `tmax`: 0 skips a ray) with its
+    point, normals, uv and the cosine with the ray."""
     n_rays = origins.shape[0]
-    tmax = jnp.full((n_rays,), jnp.inf, dtype=origins.dtype)
+    if tmax is None:
+        tmax = jnp.full((n_rays,), jnp.inf, dtype=origins.dtype)
     hit = scene.accelerator.intersect_closest(origins, directions, tmax)
     t = hit.t
     valid = hit.prim >= 0
@@ -318,6 +321,7 @@ def path_radiance(
                 max_depth=max_depth,
                 rr_depth=rr_depth,
                 hide_emitters=hide_emitters,
+                prune=True,
             )
             return jax.tree.map(lambda a, x: a.at[sel].set(x, mode="drop"), state, new)
 
@@ -364,6 +368,7 @@ def _segment(
     max_depth,
     rr_depth,
     hide_emitters=False,
+    prune=False,
 ) -> _PathState:
     """Trace segment `b` of every path: its hit and the emission found there (MIS-weighted
     against next-event estimation), then, unless it is the last segment, the vertex's light
@@ -386,7 +391,9 @@ def _segment(
         return eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive))
     return jax.lax.cond(
         b < max_depth - 1,
-        lambda: _scatter(scene, state, v, wavelength_nm, sample(), roulette=b >= rr_depth - 1),
+        lambda: _scatter(
+            scene, state, v, wavelength_nm, sample(), roulette=b >= rr_depth - 1, prune=prune
+        ),
         lambda: eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive)),
     )
 
@@ -441,8 +448,13 @@ def shading_frame(scene: RenderScene, v: _Vertex) -> ShadingFrame:
     return ShadingFrame(material, s, t, n, scatters, geometry)
 
 
-def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u_b, roulette):
-    """At the hit `v`: next-event estimation, BSDF sampling of the next segment, roulette."""
+def _scatter(
+    scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u_b, roulette, prune=False
+):
+    """At the hit `v`: next-event estimation, BSDF sampling of the next segment, roulette.
+    With `prune`, a path whose throughput is zero at every wavelength (a black BSDF) ends
+    here, as in Mitsuba: it would add nothing (`compact` loops only; the static loop of
+    reverse mode keeps it, so that derivatives through a zero reflectance survive)."""
     beta, radiance = state.beta, state.radiance
     wo = -state.d
     frame = shading_frame(scene, v)
@@ -483,6 +495,8 @@ def _scatter(scene: RenderScene, state: _PathState, v: _Vertex, wavelength_nm, u
     q = jax.lax.stop_gradient(jnp.minimum(jnp.max(beta, axis=-1) * eta_scale, 0.95))
     alive = alive & (~roulette | (u_b[:, 6] < q))
     beta = jnp.where(alive[:, None], beta / jnp.where(alive & roulette, q, 1.0)[:, None], 0.0)
+    if prune:
+        alive = alive & jnp.any(beta != 0, axis=-1)
     return _PathState(
         o=_offset(v.p, v.n, wi, offset),
         d=wi,

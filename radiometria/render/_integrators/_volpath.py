@@ -262,7 +262,8 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
     d = state.d
 
     def body(i, w: _Walk) -> _Walk:
-        v = _vertex(scene, w.o, d)
+        # Walks that ended trace nothing (an empty interval, skipped by the traversal).
+        v = _vertex(scene, w.o, d, jnp.where(w.pending, jnp.inf, 0.0).astype(dtype))
         beta = w.beta
         event = jnp.zeros((n,), bool)
         t_event = v.t
@@ -450,6 +451,8 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     q = jax.lax.stop_gradient(jnp.minimum(jnp.max(beta, axis=-1) * eta_scale, 0.95))
     alive = alive & (~roulette | (u_b[:, 6] < q))
     beta = jnp.where(alive[:, None], beta / jnp.where(alive & roulette, q, 1.0)[:, None], 0.0)
+    if not differentiable:  # zero throughput adds nothing more (`path`'s `prune`)
+        alive = alive & jnp.any(beta != 0, axis=-1)
     o = jnp.where(in_medium[:, None], p, _offset(p, ng, wi, offset))
     terminate = alive & bs.terminate_secondary & ~in_medium
     return _VolState(

@@ -159,6 +159,11 @@ inline int32_t trace(const Tree<T>& tree, const Ray<T>& r, int32_t* stack, T& t_
   T t_best = r.t_hi;
   int32_t prim = -1;
   T b1_best = 0, b2_best = 0;
+  if (!(r.t_hi > r.t_lo)) {  // an empty interval (an inactive ray): nothing to traverse
+    t_out = std::numeric_limits<T>::infinity();
+    b1_out = b2_out = T(0);
+    return prim;
+  }
   int64_t sp = 0;
   int32_t cur = 0;  // the root
   while (true) {
