@@ -99,6 +99,7 @@ class RenderScene(eqx.Module):
         *,
         two_sided=None,
         emitter_two_sided=None,
+        emitter_sphere=None,
         lights: "list[AbstractLight] | tuple" = (),
         accelerator: "str | AbstractAccelerator" = "auto",
         dtype=jnp.float32,
@@ -127,6 +128,9 @@ class RenderScene(eqx.Module):
             (default: none; only with a `SpectrumTable` of reflectances).
         - `emitter_two_sided`: `(e,)` booleans, emitters that emit on both sides (default:
             none).
+        - `emitter_sphere`: per emitter, `(center, radius)` of the sphere its triangles
+            tessellate (sampled by the cone it subtends: `AreaLight`), or `None` (default:
+            none). [scene units]
         - `lights`: further light plugins beside the area lights (`PointLight`,
             `SpotLight`, `DirectionalLight`, `ConstantLight`, `EnvironmentLight`); with any,
             the scene's `light` is a `LightSet` that picks one per sample by power.
@@ -177,7 +181,7 @@ class RenderScene(eqx.Module):
         p0, e1, e2, normal = (jnp.asarray(x, dtype=dtype) for x in (v0, e1, e2, normal))
         light = AreaLight.from_triangles(
             p0, e1, e2, normal, area, face_emitter, radiance, emitter_two_sided,
-            face_uv=face_uv, dtype=dtype,
+            face_uv=face_uv, emitter_sphere=emitter_sphere, dtype=dtype,
         )  # fmt: skip
         if lights:
             # The bounding sphere of the geometry sets the power of lights at infinity.

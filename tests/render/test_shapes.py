@@ -279,3 +279,44 @@ def test_rectangle_with_scaled_z_is_fine(tmp_path):
     """A flat shape only needs its own two axes kept (Mitsuba's Cornell box scales z)."""
     body = '<shape type="rectangle"><transform name="to_world"><scale z="0"/></transform></shape>'
     assert load_mitsuba_xml(_one_shape(tmp_path, body)).n_triangles == 2
+
+
+_C, _S = np.cos(np.pi / 6), np.sin(np.pi / 6)
+
+
+@pytest.mark.parametrize(
+    ("transform", "linear", "translation"),
+    [
+        ("", np.eye(3), np.zeros(3)),
+        ('<scale value="2"/><rotate y="1" angle="30"/><translate x="1"/>',
+         2.0 * np.array([[_C, 0, _S], [0, 1, 0], [-_S, 0, _C]]), np.array([1.0, 0, 0])),
+        ('<scale x="2" y="1" z="1"/>', None, None),  # an ellipsoid: no true sphere
+    ],
+    ids=["plain", "similarity", "non-uniform scale"],
+)  # fmt: skip
+def test_an_emitting_sphere_keeps_its_true_sphere(tmp_path, transform, linear, translation):
+    """A `sphere` emitter records the true sphere its triangles tessellate (for the cone
+    sampling of its light samples), carried through `to_world` when that is a similarity;
+    `flip_normals` (emitting inwards) drops it."""
+    path = tmp_path / "s.xml"
+
+    def load(flip=""):
+        body = ('<shape type="sphere"><point name="center" value="0.5, 0, -1"/>'
+                f'<float name="radius" value="0.8"/>{flip}'
+                f'<transform name="to_world">{transform}</transform><emitter type="area">'
+                '<rgb name="radiance" value="1"/></emitter></shape>')  # fmt: skip
+        path.write_text(f'<scene version="3.0.0">{perspective_xml("0, 0, 5", 30, 8)}{body}</scene>')
+        return load_mitsuba_xml(path)
+
+    d = load()
+    true_sphere = d.emitters[0].sphere
+    if linear is None:
+        assert true_sphere is None
+        return
+    center = linear @ np.array([0.5, 0.0, -1.0]) + translation
+    np.testing.assert_allclose(true_sphere[0], center, atol=1e-12)
+    assert true_sphere[1] == pytest.approx(0.8 * np.cbrt(np.linalg.det(linear)), rel=1e-12)
+    tri = d.faces[d.emitters[0].triangles]  # the mesh's vertices lie on it
+    r = np.linalg.norm(d.vertices[tri.ravel()] - true_sphere[0], axis=1)
+    np.testing.assert_allclose(r, true_sphere[1], rtol=1e-12)
+    assert load('<boolean name="flip_normals" value="true"/>').emitters[0].sphere is None

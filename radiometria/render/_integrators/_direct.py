@@ -120,7 +120,9 @@ def direct_radiance(
             scene.light.emitted_escaped(wi, use & ~hit.valid, wavelength_nm),
         )
         pdf_light = jnp.where(
-            hit.valid, scene.light.pdf_li(hit.face, hit.t, hit.cos_o), scene.light.pdf_escaped(wi)
+            hit.valid,
+            scene.light.pdf_li(hit.face, hit.t, hit.cos_o, o),
+            scene.light.pdf_escaped(wi),
         )
         w = jnp.where(bs.is_delta, 1.0, power_heuristic(n_b, bs.pdf, m, pdf_light))
         weight = bs.f * (jnp.abs(bs.wi[:, 2]) / jnp.where(use, bs.pdf, 1.0))[:, None]

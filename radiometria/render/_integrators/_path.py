@@ -375,7 +375,7 @@ def _segment(
     sample (NEE), its BSDF sample (the next segment) and Russian roulette."""
     v = _vertex(scene, state.o, state.d)
     le = scene.light.emitted(v.face, v.cos_o, v.valid, wavelength_nm, v.uv)
-    pdf_light = scene.light.pdf_li(v.face, v.t, v.cos_o)
+    pdf_light = scene.light.pdf_li(v.face, v.t, v.cos_o, state.o)
     # A ray that leaves the scene sees the lights at infinity (constant, envmap), weighted
     # against next-event estimation of the same direction like a hit on an emitter.
     escaped = state.alive & ~v.valid

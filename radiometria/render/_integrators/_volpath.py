@@ -290,7 +290,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         # Emission where the walk meets a surface or leaves the scene, weighted by MIS against
         # next-event estimation from the segment's vertex (distance dist + t from it).
         le = scene.light.emitted(v.face, v.cos_o, hit, wavelength_nm, v.uv)
-        pdf_light = scene.light.pdf_li(v.face, w.dist + v.t, v.cos_o)
+        pdf_light = scene.light.pdf_li(v.face, w.dist + v.t, v.cos_o, state.o)
         mis = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
         gathered = jnp.where((hit & show)[:, None], beta * le * mis[:, None], 0.0)
         le_esc = scene.light.emitted_escaped(d, escaped, wavelength_nm)

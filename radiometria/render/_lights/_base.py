@@ -157,11 +157,17 @@ class AbstractLight(eqx.Module):
 
     @abc.abstractmethod
     def pdf_li(
-        self, face: Int[Array, " n"], dist: Float[Array, " n"], cos_light: Float[Array, " n"]
+        self,
+        face: Int[Array, " n"],
+        dist: Float[Array, " n"],
+        cos_light: Float[Array, " n"],
+        origin: Float[Array, "n 3"] | None = None,
     ) -> Float[Array, " n"]:
         """Solid-angle density [sr^-1] with which `sample_li` picks the surface point a ray hit
         on triangle `face` at distance `dist` [scene units], where `cos_light` is the cosine
-        between the triangle's normal and the direction back to the ray's origin."""
+        between the triangle's normal and the direction back to the ray's origin `origin`
+        (the shading point whose light sample it competes with; a density that depends on
+        the shading point, as a sphere's cone, needs it)."""
 
     @abc.abstractmethod
     def emitted(

@@ -90,7 +90,7 @@ class AbstractSurfacelessLight(AbstractLight):
     """Lights with no surface in the scene (all but the area lights): no emission at surface
     hits, and a zero density for `sample_li` picking a surface point."""
 
-    def pdf_li(self, face, dist, cos_light):
+    def pdf_li(self, face, dist, cos_light, origin=None):
         return jnp.zeros(face.shape, dist.dtype)
 
     def emitted(self, face, cos_o, valid, wavelength_nm, uv=None):

@@ -160,11 +160,11 @@ class LightSet(AbstractLight):
         pdf_pos, pdf_dir = self.lights[i].pdf_le(face, cos_o)
         return self.prob[i] * pdf_pos, pdf_dir
 
-    def pdf_li(self, face, dist, cos_light):
+    def pdf_li(self, face, dist, cos_light, origin=None):
         if self.area_index < 0:
             return jnp.zeros(face.shape, dist.dtype)
         i = self.area_index
-        return self.prob[i] * self.lights[i].pdf_li(face, dist, cos_light)
+        return self.prob[i] * self.lights[i].pdf_li(face, dist, cos_light, origin)
 
     def emitted(self, face, cos_o, valid, wavelength_nm, uv=None):
         if self.area_index < 0:

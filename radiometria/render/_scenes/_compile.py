@@ -186,6 +186,7 @@ def compile_scene(
         description.face_emitter,
         radiance,
         emitter_two_sided=[e.two_sided for e in description.emitters],
+        emitter_sphere=[e.sphere for e in description.emitters],
         lights=scene_lights(description),
         accelerator=accelerator,
         **_scene_media(description, where),

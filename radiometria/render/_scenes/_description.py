@@ -133,6 +133,9 @@ class AreaEmitter:
     - `total_area`: their sum. [scene length unit^2]
     - `two_sided`: emit on both sides (default: only on the side of the triangle normal).
     - `name`: the shape's name.
+    - `sphere`: `(center (3,), radius)` of the true sphere when the triangles tessellate a
+        `sphere` shape (its light samples are then drawn from the cone it subtends), else
+        `None`. [scene length unit]
 
     !!! note "Thesis"
         Ch. 8 (emitters; area lights are sampled uniformly by area, `Pharr2023` §12.2).
@@ -144,6 +147,7 @@ class AreaEmitter:
     total_area: float
     two_sided: bool = False
     name: str = ""
+    sphere: tuple | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -387,6 +391,7 @@ class ShapeDescription:
     uvs: np.ndarray | None = None  # (v, 2) texture coordinates, or None
     # Mitsuba's mesh attributes: "vertex_<name>" (v, d) and "face_<name>" (f, d) arrays
     attributes: dict = dataclasses.field(default_factory=dict)
+    sphere: tuple | None = None  # a tessellated sphere's true (center, radius) (`ShapeMesh`)
 
 
 def assemble(
@@ -460,6 +465,7 @@ def assemble(
                     total_area=float(areas.sum()),
                     two_sided=bool(sh.emitter.get("two_sided", False)),
                     name=sh.name,
+                    sphere=sh.sphere,
                 )
             )
         else:

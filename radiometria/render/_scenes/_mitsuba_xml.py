@@ -869,7 +869,7 @@ def _shape(ctx: _Ctx, node: _Node, materials: list, default_material: list) -> S
     name = node.attrib.get("id", f"{kind}@{node.line}")
     return ShapeDescription(
         name, mesh.vertices, mesh.faces, material, emitter, where=where, normals=mesh.normals,
-        uvs=mesh.uvs, attributes=mesh.attributes,
+        uvs=mesh.uvs, attributes=mesh.attributes, sphere=mesh.sphere,
     )  # fmt: skip
 
 

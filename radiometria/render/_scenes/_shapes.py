@@ -68,6 +68,10 @@ class ShapeMesh:
     - `uvs`: `(v, 2)` texture coordinates, or `None`.
     - `attributes`: Mitsuba's mesh attributes: `vertex_<name>` `(v, d)` and `face_<name>`
         `(f, d)` arrays (e.g. `vertex_color`), read by `mesh_attribute` textures.
+    - `sphere`: for a tessellated `sphere` with outward normals, the true sphere's
+        `(center (3,), radius)` [scene length unit], so that an emitter on it is sampled by
+        the cone it subtends (`AreaLight`); `None` for other meshes, and once a transform
+        that is not a similarity or `flip_normals` is applied.
     """
 
     vertices: np.ndarray
@@ -75,6 +79,7 @@ class ShapeMesh:
     normals: np.ndarray | None = None
     uvs: np.ndarray | None = None
     attributes: dict = dataclasses.field(default_factory=dict)
+    sphere: tuple | None = None
 
 
 def rectangle() -> ShapeMesh:
@@ -172,7 +177,8 @@ def sphere(
     v = n.reshape(-1, 3)
     keep = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
     f = f[keep > 1e-12]
-    return ShapeMesh(v * radius + np.asarray(center, np.float64), f, v.copy(), uv.reshape(-1, 2))
+    c = np.asarray(center, np.float64)
+    return ShapeMesh(v * radius + c, f, v.copy(), uv.reshape(-1, 2), sphere=(c, float(radius)))
 
 
 def _frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -253,4 +259,19 @@ def transform_mesh(
         n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         normals = -n if flip_normals else n
     f = mesh.faces[:, [0, 2, 1]] if flip_normals else mesh.faces
-    return ShapeMesh(v, f, normals, mesh.uvs, mesh.attributes)
+    return ShapeMesh(
+        v, f, normals, mesh.uvs, mesh.attributes, _transform_sphere(mesh.sphere, m, flip_normals)
+    )
+
+
+def _transform_sphere(sphere, m: np.ndarray, flip_normals: bool):
+    """A sphere's `(center, radius)` under the affine `m`, if `m` keeps it a sphere (a
+    similarity: `L^T L = s^2 I`) with outward normals; else `None`."""
+    if sphere is None or flip_normals:
+        return None
+    lin = m[:3, :3]
+    gram = lin.T @ lin
+    s2 = np.trace(gram) / 3.0
+    if not s2 > 0 or np.max(np.abs(gram - s2 * np.eye(3))) > 1e-9 * s2:
+        return None
+    return lin @ sphere[0] + m[:3, 3], float(np.sqrt(s2) * sphere[1])
