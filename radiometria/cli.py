@@ -68,6 +68,9 @@ def _release_memory() -> None:
     plt = sys.modules.get("matplotlib.pyplot")  # not imported here: it would pick a backend
     if plt is not None:
         plt.close("all")
+    scenes = sys.modules.get("radiometria.render._scenes._compile")  # compiled scenes kept
+    if scenes is not None:
+        scenes.clear_compiled_scenes()
     jax.clear_caches()
     gc.collect()
     try:

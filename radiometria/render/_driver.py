@@ -85,7 +85,7 @@ from ._render_scene import RenderScene
 from ._samplers import AbstractSampler, Independent, sampler_seed
 from ._scenes import (
     SceneDescription,
-    compile_scene,
+    compile_scene_cached,
     load_scene,
     scene_integrator,
     scene_sampler,
@@ -794,7 +794,7 @@ def _resolve_scene(scene, camera, rfilter, width, height):
     if isinstance(scene, SceneDescription):
         if camera is not None:
             raise ValueError("`camera` is for a RenderScene; a loaded scene has its own camera.")
-        rs, cam, filt = compile_scene(scene, width=width, height=height)
+        rs, cam, filt = compile_scene_cached(scene, width=width, height=height)
         filt = filt if rfilter is None else rfilter
         return rs, cam, filt, scene_integrator(scene), scene_sampler(scene), scene.spp, scene.seed
     if isinstance(scene, RenderScene):

@@ -239,3 +239,41 @@ def test_render_multi_process_matches_one_process(tmp_path):
     )
     for i in range(2):
         np.testing.assert_allclose(np.load(tmp_path / f"part{i}.npy"), one, rtol=1e-5, atol=1e-6)
+
+
+def test_a_loaded_scene_is_compiled_once_and_again_when_edited(monkeypatch):
+    """`render` keeps the compilation of a loaded scene (its BVH and plugins) for the next
+    render of the same scene and size, and compiles again when the description's content
+    changes, also when an array of it is edited in place."""
+    import dataclasses
+
+    from radiometria.render import load_scene
+    from radiometria.render._scenes import _compile
+
+    _compile.clear_compiled_scenes()
+    calls = []
+    original = _compile.compile_scene
+
+    def counting(*args, **kwargs):
+        calls.append(kwargs.get("width"))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(_compile, "compile_scene", counting)
+    desc = load_scene("cornell-box")
+    args = {"spp": 2, "width": 8, "height": 8, "progress": False}
+    first = np.asarray(render(desc, seed=1, **args))
+    second = np.asarray(render(desc, seed=1, **args))
+    np.testing.assert_array_equal(first, second)
+    assert len(calls) == 1
+    render(desc, seed=1, **(args | {"width": 6}))  # another size: compiled for it
+    assert len(calls) == 2
+    bright = dataclasses.replace(
+        desc, emitters=tuple(dataclasses.replace(e, radiance=e.radiance) for e in desc.emitters)
+    )
+    render(bright, seed=1, **args)  # equal content: found
+    assert len(calls) == 2
+    desc.vertices[desc.faces[desc.emitters[0].triangles[0], 0], 1] -= 0.05  # moved in place
+    moved = np.asarray(render(desc, seed=1, **args))
+    assert len(calls) == 3
+    assert not np.array_equal(moved, first)
+    _compile.clear_compiled_scenes()

@@ -2,7 +2,9 @@
 the built-in scenes, and the compilation of a description into the renderer's plugins."""
 
 from ._compile import (
+    clear_compiled_scenes as clear_compiled_scenes,
     compile_scene as compile_scene,
+    compile_scene_cached as compile_scene_cached,
     scene_filter as scene_filter,
     scene_integrator as scene_integrator,
     scene_sampler as scene_sampler,

@@ -1,7 +1,12 @@
 """From a scene description to the renderer's plugins (thesis ch. 8; section 2.3)."""
 
+import collections
 import dataclasses
+import hashlib
+import threading
+from pathlib import PurePath
 
+import equinox as eqx
 import jax
 import numpy as np
 
@@ -17,6 +22,7 @@ from ._description import SceneDescription, SceneError
 
 __all__ = [
     "compile_scene",
+    "compile_scene_cached",
     "scene_camera",
     "scene_filter",
     "scene_integrator",
@@ -134,6 +140,80 @@ def scene_lights(description: SceneDescription) -> list:
         except ValueError as e:
             raise SceneError(str(e)) from None
     return plugins
+
+
+_COMPILED_SCENES = 2  # compiled scenes `compile_scene_cached` keeps (most recent first)
+_compiled: "collections.OrderedDict[tuple, tuple]" = collections.OrderedDict()
+_compiled_lock = threading.Lock()
+
+
+def _digest(obj, h) -> None:
+    """Feed `obj` into the hash `h` by content: arrays by dtype, shape and bytes, dataclasses
+    and equinox modules field by field, containers item by item, anything else by repr."""
+    if isinstance(obj, np.ndarray | jax.Array):
+        a = np.ascontiguousarray(np.asarray(obj))
+        h.update(f"a{a.dtype.str}{a.shape}".encode())
+        h.update(a.view(np.uint8).reshape(-1).data if a.size else b"")
+    elif dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        h.update(f"d{type(obj).__qualname__}(".encode())
+        for f in dataclasses.fields(obj):
+            h.update(f.name.encode())
+            _digest(getattr(obj, f.name), h)
+        h.update(b")")
+    elif isinstance(obj, eqx.Module):
+        leaves, treedef = jax.tree.flatten(obj)
+        h.update(f"m{treedef}".encode())
+        for leaf in leaves:
+            _digest(leaf, h)
+    elif isinstance(obj, list | tuple):
+        h.update(f"{type(obj).__name__}{len(obj)}(".encode())
+        for x in obj:
+            _digest(x, h)
+        h.update(b")")
+    elif isinstance(obj, dict):
+        h.update(f"dict{len(obj)}(".encode())
+        for k in sorted(obj, key=repr):
+            _digest(k, h)
+            _digest(obj[k], h)
+        h.update(b")")
+    elif obj is None or isinstance(obj, bool | int | float | complex | str | bytes | PurePath):
+        h.update(f"{type(obj).__name__}:{obj!r};".encode())
+    else:
+        h.update(f"{type(obj).__qualname__}:{obj!r};".encode())
+
+
+def scene_digest(description: SceneDescription) -> str:
+    """A SHA-256 of a scene description's content (its arrays' bytes, its parameters), so
+    that an edited description never finds the compilation of the one it was."""
+    h = hashlib.sha256()
+    _digest(description, h)
+    return h.hexdigest()
+
+
+def compile_scene_cached(
+    description: SceneDescription, *, width=None, height=None
+) -> tuple[RenderScene, AbstractCamera, AbstractFilter]:
+    """`compile_scene`, kept for the last `_COMPILED_SCENES` descriptions (by content,
+    `scene_digest`) and image sizes: rendering one loaded scene again (a convergence study,
+    a benchmark, a figure at several spp) does not rebuild its BVH and plugins. Building them
+    for 36 000 triangles takes 0.11 s, half of a 64 x 64 render at 4 spp."""
+    key = (scene_digest(description), width, height)
+    with _compiled_lock:
+        if key in _compiled:
+            _compiled.move_to_end(key)
+            return _compiled[key]
+    out = compile_scene(description, width=width, height=height)
+    with _compiled_lock:
+        _compiled[key] = out
+        while len(_compiled) > _COMPILED_SCENES:
+            _compiled.popitem(last=False)
+    return out
+
+
+def clear_compiled_scenes() -> None:
+    """Forget the scenes `compile_scene_cached` keeps (their device arrays are freed)."""
+    with _compiled_lock:
+        _compiled.clear()
 
 
 def compile_scene(
