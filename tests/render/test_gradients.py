@@ -132,3 +132,48 @@ def test_path_radiance_roulette_gradient_is_unbiased():
     assert np.count_nonzero(np.any(d != 0, axis=1)) > n // 10  # roulette acted on many paths
     z = d.mean(axis=0) / (d.std(axis=0, ddof=1) / np.sqrt(n))
     assert np.all(np.abs(z) < 5.0), z
+
+
+def test_path_radiance_grad_through_a_mixture_of_material_kinds():
+    """With two material kinds (the large box a rough conductor), each kind is evaluated on
+    its own paths in blocks (`_materials._set._on_paths`, a static loop of conditionals):
+    reverse and forward mode still match central finite differences, and the estimate
+    equals that of every kind evaluated on every path."""
+    from radiometria.render._materials import _set as material_set
+    from radiometria.render._materials._rough_conductor import RoughConductor
+
+    (scene, rays, u), red, rgb = _setup()
+    desc = load_scene("cornell-box")
+    metal = RoughConductor.from_properties({"alpha": 0.3, "material": "Cu"})
+    metal = jax.tree.map(
+        lambda x: x.astype(jnp.float64) if jnp.issubdtype(x.dtype, jnp.floating) else x, metal
+    )
+    (diffuse,) = scene.materials.plugins
+    box = np.asarray(desc.face_shape) == desc.shape_names.index("large-box")
+    face_material = jnp.where(jnp.asarray(box), 3, scene.face_material)
+    materials = material_set.MaterialSet.from_materials([diffuse, metal])
+    scene = eqx.tree_at(lambda s: (s.materials, s.face_material), scene, (materials, face_material))
+
+    @functools.partial(jax.jit, static_argnames="compact")
+    def estimate(c, compact=True):
+        grid = jnp.asarray(wavelength_grid_nm())
+        row = rm.upsampling.RGBAlbedoSpectrum(rm.upsampling.get_lut("sRGB"), c)(grid)
+        values = scene.materials.plugins[0].reflectance.table.values.at[red].set(row)
+        s = eqx.tree_at(lambda s: s.materials.plugins[0].reflectance.table.values, scene, values)
+        radiance = path_radiance(s, *rays, u, max_depth=DEPTH, rr_depth=DEPTH, compact=compact)
+        return jnp.sum(radiance)
+
+    h = 1e-6
+    fd = np.array([(estimate(rgb + h * e) - estimate(rgb - h * e)) / (2 * h) for e in np.eye(3)])
+    reverse = jax.grad(lambda c: estimate(c, compact=False))(rgb)
+    forward = jax.jacfwd(estimate)(rgb)
+    assert np.all(np.abs(fd) > 1e-2)
+    np.testing.assert_allclose(np.asarray(reverse), fd, rtol=1e-6)
+    np.testing.assert_allclose(np.asarray(forward), fd, rtol=1e-6)
+    everywhere = material_set._MIN_SPLIT
+    try:
+        material_set._MIN_SPLIT = 10**9  # every kind on every path, as before the blocks
+        plain = jax.jit(estimate.__wrapped__)(rgb)  # traced afresh
+    finally:
+        material_set._MIN_SPLIT = everywhere
+    np.testing.assert_allclose(float(estimate(rgb)), float(plain), rtol=1e-12)

@@ -1,6 +1,7 @@
 """The materials of a scene: one plugin per kind present, and the BxDF of each path's material."""
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Int
@@ -135,8 +136,54 @@ class MaterialSet(eqx.Module):
         return _Mixture(self.plugin_of[material], parts)
 
 
+_BLOCKS = 4  # each kind is evaluated in blocks of n / _BLOCKS paths, only as many as it needs
+_MIN_SPLIT = 64  # batches smaller than this evaluate every kind on every path
+
+
+def _on_paths(method, part, args, mask):
+    """`method(part, *args)` for the paths of `mask` `(n,)` (elsewhere the result is 0): the
+    paths of `mask` are gathered first and evaluated in blocks of `n / _BLOCKS`, only as many
+    blocks as they fill (`lax.cond` skips the others; the loop's static trip count keeps it
+    differentiable), so a kind few paths use (a metal ball on a diffuse floor) costs in
+    proportion to those paths. Leaves of `part` with a leading axis of `n` are per-path
+    parameters and are gathered with the arguments."""
+    n = mask.shape[0]
+    if n < _MIN_SPLIT:
+        return method(part, *args)
+    m = -(-n // _BLOCKS)
+    (order,) = jnp.nonzero(mask, size=m * _BLOCKS, fill_value=n)
+    count = jnp.sum(mask, dtype=jnp.int32)
+
+    def block(j):
+        idx = jax.lax.dynamic_slice_in_dim(order, j * m, m)
+
+        def take(x):
+            if hasattr(x, "shape") and x.ndim >= 1 and x.shape[0] == n:
+                return jnp.take(x, idx, axis=0, mode="clip")
+            return x
+
+        return idx, method(jax.tree.map(take, part), *(take(a) for a in args))
+
+    _, shapes = jax.eval_shape(block, 0)
+    init = jax.tree.map(lambda sd: jnp.zeros((n,) + sd.shape[1:], sd.dtype), shapes)
+
+    def body(j, acc):
+        def run(acc):
+            idx, out = block(j)  # padding indices are n: dropped
+            return jax.tree.map(lambda a, o: a.at[idx].set(o, mode="drop"), acc, out)
+
+        return jax.lax.cond(j * m < count, run, lambda acc: acc, acc)
+
+    return jax.lax.fori_loop(0, _BLOCKS, body, init)
+
+
 class _Mixture(AbstractBxDF):
-    """The BxDFs of several material kinds, one chosen per path by `plugin` (`where` selects)."""
+    """The BxDFs of several material kinds, one chosen per path by `plugin` (`where` selects).
+
+    Each kind is evaluated on the paths that use it (`_on_paths`): with a rough conductor
+    ball on a diffuse floor under an environment map, every path once evaluated the
+    microfacet model, which took 60 % of the render.
+    """
 
     plugin: Array  # (n,) index into `parts`
     parts: tuple
@@ -148,14 +195,17 @@ class _Mixture(AbstractBxDF):
             out = jnp.where(mask, v, out)
         return out
 
+    def _each(self, method, *args):
+        return [_on_paths(method, b, args, self.plugin == i) for i, b in enumerate(self.parts)]
+
     def f(self, wo, wi, *, mode: str = "radiance"):
-        return self._pick([b.f(wo, wi, mode=mode) for b in self.parts])
+        return self._pick(self._each(lambda b, o, i: b.f(o, i, mode=mode), wo, wi))
 
     def pdf(self, wo, wi):
-        return self._pick([b.pdf(wo, wi) for b in self.parts])
+        return self._pick(self._each(lambda b, o, i: b.pdf(o, i), wo, wi))
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
-        samples = [b.sample_f(wo, u_lobe, u2, mode=mode) for b in self.parts]
+        samples = self._each(lambda b, o, u, v: b.sample_f(o, u, v, mode=mode), wo, u_lobe, u2)
         return BSDFSample(
             **{
                 name: self._pick([getattr(s, name) for s in samples])
