@@ -410,11 +410,17 @@ def invert_uniform_sphere_sample(w: FloatLike) -> Float[Array, "*batch 2"]:
 
 @eqx.filter_jit
 def sample_uniform_cone(
-    u: FloatLike, cos_theta_max: FloatLike, *, check: bool = True
+    u: FloatLike,
+    cos_theta_max: FloatLike,
+    *,
+    check: bool = True,
+    one_minus_cos_theta_max: FloatLike | None = None,
 ) -> Float[Array, "*batch 3"]:
     r"""Uniform direction in the cone of half-angle $\theta_{max}$ around +z.
 
-    $\cos\theta = (1 - u_0) + u_0 \cos\theta_{max}$, $\phi = 2\pi u_1$.
+    $1 - \cos\theta = u_0 (1 - \cos\theta_{max})$, $\phi = 2\pi u_1$, and
+    $\sin^2\theta = (1 - \cos\theta)(1 + \cos\theta)$ without cancellation, so narrow cones
+    stay accurate in float32.
 
     **Arguments:**
 
@@ -422,6 +428,10 @@ def sample_uniform_cone(
     - `cos_theta_max`: cosine of the half-angle, in [-1, 1). [dimensionless]
     - `check`: validate `u` in [0, 1) with `eqx.error_if` (default); `False` skips it for
         callers that validated already, such as the renderer's inner loop. [bool]
+    - `one_minus_cos_theta_max`: $1 - \cos\theta_{max}$ computed without cancellation
+        (e.g. $\sin^2\theta_{max} / (1 + \cos\theta_{max})$ for the cone of a distant
+        sphere), used instead of `1 - cos_theta_max`; in float32 that difference keeps only
+        a few digits of a cone a few milliradians wide. [dimensionless]
 
     **Returns:**
 
@@ -432,11 +442,14 @@ def sample_uniform_cone(
         Thesis ch. 5.
     """
     u = _u(u, 2, check=check)
-    c = as_float_array(cos_theta_max, "cos_theta_max")
-    cos_t = (1.0 - u[..., 0]) + u[..., 0] * c
-    sin_t = safe_sqrt(1.0 - cos_t * cos_t)
+    if one_minus_cos_theta_max is None:
+        omc = 1.0 - as_float_array(cos_theta_max, "cos_theta_max")
+    else:
+        omc = as_float_array(one_minus_cos_theta_max, "one_minus_cos_theta_max")
+    v = u[..., 0] * omc  # 1 - cos theta
+    sin_t = safe_sqrt(v * (2.0 - v))
     phi = 2 * PI * u[..., 1]
-    return jnp.stack([sin_t * jnp.cos(phi), sin_t * jnp.sin(phi), cos_t], axis=-1)
+    return jnp.stack([sin_t * jnp.cos(phi), sin_t * jnp.sin(phi), 1.0 - v], axis=-1)
 
 
 @eqx.filter_jit

@@ -324,3 +324,22 @@ def test_warps_dtype_follows_input(dtype):
     assert mc.sample_cosine_hemisphere(u).dtype == dtype
     assert mc.sample_uniform_triangle(u).dtype == dtype
     assert mc.sample_visible_wavelengths(u[:, 0]).dtype == dtype
+
+
+def test_uniform_cone_stays_accurate_when_narrow_in_float32():
+    """A cone a milliradian wide (a distant sphere light's): with 1 - cos(theta_max) given
+    without cancellation, float32 samples fill it uniformly in solid angle (theta^2 uniform
+    on [0, theta_max^2], mean theta_max^2 / 2 within 1 %); from the rounded float32
+    cos(theta_max) alone the cone's size is off by about 10 %."""
+    theta_max = 1e-3
+    omc = np.float32(2 * np.sin(theta_max / 2) ** 2)  # 1 - cos, exact to float32 rounding
+    u = jax.random.uniform(jax.random.key(3), (200_000, 2), jnp.float32)
+    w = mc.sample_uniform_cone(u, jnp.float32(1) - omc, one_minus_cos_theta_max=omc)
+    assert w.dtype == jnp.float32
+    w = np.asarray(w, np.float64)
+    theta2 = np.arctan2(np.hypot(w[:, 0], w[:, 1]), w[:, 2]) ** 2
+    assert theta2.max() <= theta_max**2 * (1 + 1e-3)
+    assert abs(theta2.mean() / (theta_max**2 / 2) - 1) < 0.01
+    rounded = np.asarray(mc.sample_uniform_cone(u, jnp.float32(np.cos(theta_max))), np.float64)
+    theta2_rounded = np.arctan2(np.hypot(rounded[:, 0], rounded[:, 1]), rounded[:, 2]) ** 2
+    assert abs(theta2_rounded.mean() / (theta_max**2 / 2) - 1) > 0.03

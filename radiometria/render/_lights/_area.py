@@ -8,7 +8,7 @@ import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 from ..._math import dot
-from ...montecarlo import sample_cosine_hemisphere, sample_uniform_triangle
+from ...montecarlo import sample_cosine_hemisphere, sample_uniform_cone, sample_uniform_triangle
 from ...scattering import coordinate_system
 from ...upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
 from .._spectral import SpectrumTable, wavelength_grid_nm
@@ -315,17 +315,12 @@ class AreaLight(AbstractLight):
         le = self.radiance(e, wavelength_nm, uv)
         if self.sphere_radius is not None:  # a direction in the cone of a sphere (docstring)
             cone, pdf_cone, (axis, dc, r, omc) = self._cone(e, p)
-            v = u2[:, 0] * omc
-            cos_t = 1.0 - v
-            sin2 = v * (2.0 - v)
-            sin_t = jnp.sqrt(jnp.maximum(sin2, 0.0))
-            phi = 2.0 * jnp.pi * u2[:, 1]
+            local = sample_uniform_cone(u2, 1.0 - omc, check=False, one_minus_cos_theta_max=omc)
+            sin2 = local[:, 0] ** 2 + local[:, 1] ** 2  # no cancellation in narrow cones
             s, t = coordinate_system(axis)
-            w_c = cos_t[:, None] * axis + sin_t[:, None] * (
-                jnp.cos(phi)[:, None] * s + jnp.sin(phi)[:, None] * t
-            )
+            w_c = local[:, 0:1] * s + local[:, 1:2] * t + local[:, 2:3] * axis
             w_c = w_c / jnp.sqrt(dot(w_c, w_c))[:, None]
-            d_c = dc * cos_t - jnp.sqrt(jnp.maximum(r * r - dc * dc * sin2, 0.0))
+            d_c = dc * local[:, 2] - jnp.sqrt(jnp.maximum(r * r - dc * dc * sin2, 0.0))
             wi = jnp.where(cone[:, None], w_c, wi)
             dist = jnp.where(cone, d_c, dist)
             pdf = jnp.where(cone, pdf_cone, pdf)
