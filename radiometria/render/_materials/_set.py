@@ -26,8 +26,8 @@ class MaterialSet(eqx.Module):
     - `transmissive`: `(m,)` bool, materials that transmit (both sides bound a medium).
 
     At a hit, `bxdf(material, wavelength_nm, uv)` is the plugin's own BxDF when the scene has one
-    kind; otherwise every kind's BxDF is evaluated and each path takes its own (`where`), the
-    usual way to vectorise a mixture of kinds.
+    kind; otherwise a mixture whose queries evaluate each kind on the paths that use it (in
+    blocks, `_on_paths`) and give each path its own kind's result.
 
     !!! note "Thesis"
         Chapter 3 (BSDFs, eq. 3.4).
