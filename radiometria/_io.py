@@ -1,4 +1,5 @@
-"""Atomic file writes and deterministic `.npz` files (floor 1: imports nothing from radiometria).
+"""Atomic file writes, deterministic `.npz` files and content hashes of arrays (floor 1:
+imports nothing from radiometria).
 
 Every file the package writes (images, coefficient tables, figures, packaged data, compiled
 kernels) goes through `atomic_write`, `atomic_write_bytes` or `atomic_write_path`: the content
@@ -25,6 +26,7 @@ from typing import BinaryIO
 import numpy as np
 
 __all__ = [
+    "hash_array",
     "atomic_write",
     "atomic_write_bytes",
     "atomic_write_path",
@@ -136,3 +138,11 @@ def write_npz_deterministic(
 ) -> Path:
     """Atomically write `npz_bytes(arrays)` to `path`; returns `path` as a `Path`."""
     return atomic_write_bytes(path, npz_bytes(arrays), mode=mode)
+
+
+def hash_array(h, array) -> None:
+    """Feed an array into the hash `h` (a `hashlib` object) by content: its dtype and shape,
+    then its bytes in C order, so that equal arrays hash equally whatever their layout."""
+    a = np.asarray(array)
+    h.update(f"{a.dtype}{a.shape}".encode())
+    h.update(np.ascontiguousarray(a).tobytes())

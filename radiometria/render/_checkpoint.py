@@ -21,7 +21,7 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from .._io import write_npz_deterministic
+from .._io import hash_array, write_npz_deterministic
 
 __all__ = ["CheckpointError", "load_checkpoint", "render_identity", "save_checkpoint"]
 
@@ -39,9 +39,7 @@ def render_identity(kernel, *, seed: int, spp: int, width: int, height: int, lay
     leaves, treedef = jax.tree_util.tree_flatten(kernel)
     digest.update(str(treedef).encode())
     for leaf in leaves:
-        a = np.asarray(leaf)
-        digest.update(f"{a.dtype}{a.shape}".encode())
-        digest.update(np.ascontiguousarray(a).tobytes())
+        hash_array(digest, leaf)
     return {
         "format": _FORMAT,
         "version": importlib.metadata.version("radiometria"),

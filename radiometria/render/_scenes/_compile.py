@@ -10,6 +10,7 @@ import equinox as eqx
 import jax
 import numpy as np
 
+from ..._io import hash_array
 from ...camera import AbstractCamera, AbstractFilter, OrthographicCamera, ThinLensCamera
 from .._integrators import AbstractIntegrator
 from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
@@ -151,9 +152,8 @@ def _digest(obj, h) -> None:
     """Feed `obj` into the hash `h` by content: arrays by dtype, shape and bytes, dataclasses
     and equinox modules field by field, containers item by item, anything else by repr."""
     if isinstance(obj, np.ndarray | jax.Array):
-        a = np.ascontiguousarray(np.asarray(obj))
-        h.update(f"a{a.dtype.str}{a.shape}".encode())
-        h.update(a.view(np.uint8).reshape(-1).data if a.size else b"")
+        h.update(b"a")
+        hash_array(h, obj)
     elif dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         h.update(f"d{type(obj).__qualname__}(".encode())
         for f in dataclasses.fields(obj):
