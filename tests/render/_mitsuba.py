@@ -63,19 +63,30 @@ def z_test_against_mitsuba(
     seed: int = 0,
     ref_seed: int = 1,
     ours_path=None,
+    renders: int = 1,
     **render_kwargs,
 ):
     """Render `path` with radiometria (XYZ, independent samples by default) and with Mitsuba
     (`mitsuba_moments`), and return `pixel_z_test(ours, mean, variance, spp, ref_spp)`.
-    `ours_path`: render that scene instead against `path`'s reference (negative controls)."""
+    `ours_path`: render that scene instead against `path`'s reference (negative controls).
+    `renders` > 1: that many renders of `spp` samples (seeds `seed`, `seed + 1`, ...) judged by
+    the two-sample test with their own per-sample variance, for estimators whose noise is not
+    the reference's (light tracing, bidirectional methods)."""
     from radiometria.montecarlo import pixel_z_test
     from radiometria.render import render
 
     mean, var = mitsuba_moments(path, ref_spp, seed=ref_seed)
     render_kwargs.setdefault("progress", False)
     ours_path = path if ours_path is None else ours_path
-    ours = np.asarray(render(ours_path, spp=spp, seed=seed, return_xyz=True, **render_kwargs))
-    return pixel_z_test(ours.astype(np.float64), mean, var, spp, ref_spp)
+    ours = np.stack([
+        np.asarray(render(ours_path, spp=spp, seed=seed + i, return_xyz=True, **render_kwargs),
+                   np.float64)
+        for i in range(renders)
+    ])  # fmt: skip
+    if renders == 1:
+        return pixel_z_test(ours[0], mean, var, spp, ref_spp)
+    own = ours.var(axis=0, ddof=1) * spp  # per-sample variance of one render's samples
+    return pixel_z_test(ours.mean(axis=0), mean, var, spp * renders, ref_spp, image_variance=own)
 
 
 def film_xml(size: int, spp: int = 16, rfilter: str = "gaussian") -> str:

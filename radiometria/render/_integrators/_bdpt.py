@@ -85,8 +85,9 @@ from jaxtyping import Array, Bool, Float
 
 from ..._math import dot
 from ...scattering import coordinate_system
+from .._materials import HitGeometry
 from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
-from ._path import _offset, _vertex
+from ._path import _offset, _vertex, shading_frame
 from ._ptracer import Splats
 
 __all__ = ["BDPT", "HEURISTICS", "bdpt_mis_weight", "bdpt_sample_dimensions"]
@@ -112,6 +113,9 @@ class _Vertices(eqx.Module):
     p: Array  # position (V, n, 3)
     ng: Array  # geometric normal (zero where none)
     ns: Array  # shading normal, turned to the side the path scatters on
+    s: Array  # shading tangents: the local frame is (s, t, ns)
+    t: Array
+    geometry: HitGeometry | None  # for normal and bump maps (None when no material needs it)
     wo: Array  # unit direction towards the previous vertex
     material: Array  # int32
     uv: Array  # (V, n, 2)
@@ -309,16 +313,13 @@ class BDPT(AbstractIntegrator):
             hit = alive & v.valid
             esc = alive & ~v.valid if escapes else jnp.zeros((n,), bool)
             valid = hit | esc
-            material = scene.face_material[v.face]
-            two_sided = scene.materials.two_sided[material]
-            transmissive = scene.materials.transmissive[material]
-            front = v.cos_o > 0
-            ns = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.ns, v.ns)
-            surf = hit & (front | two_sided | transmissive)
+            frame = shading_frame(scene, v)
+            material = frame.material
+            surf = hit & frame.scatters
             wo = -d
             p = jnp.where(esc[:, None], o + d, v.p)
             ng = jnp.where(esc[:, None], wo, v.n)
-            ns = jnp.where(esc[:, None], wo, ns)
+            ns = jnp.where(esc[:, None], wo, frame.n)
             to_prev = p_prev - p
             d2 = jnp.maximum(dot(to_prev, to_prev), jnp.finfo(dtype).tiny)
             # solid angle -> area here; from a disk at infinity the cosine alone; to a vertex
@@ -334,13 +335,18 @@ class BDPT(AbstractIntegrator):
                 emit_pos = jnp.where(esc, scene.light.pdf_escaped(d), emit_pos)
                 emit_dir = jnp.where(esc, disk, emit_dir)
 
-            s, t = coordinate_system(ns)
+            if escapes:  # a vertex at infinity has no surface; its frame faces back
+                s_esc, t_esc = coordinate_system(wo)
+                s = jnp.where(esc[:, None], s_esc, frame.s)
+                t = jnp.where(esc[:, None], t_esc, frame.t)
+            else:
+                s, t = frame.s, frame.t
 
             def to_local(w):
                 return jnp.stack([dot(w, s), dot(w, t), dot(w, ns)], axis=-1)
 
             wo_l = to_local(wo)
-            bsdf = scene.materials.bxdf(material, wl, v.uv)
+            bsdf = scene.materials.bxdf(material, wl, v.uv, frame.geometry)
             u = variates(first_dim + _DIMENSIONS_PER_VERTEX * i, 4, paths).astype(dtype)
             bs = bsdf.sample_f(wo_l, u[:, 2], u[:, 0:2], mode=mode)
             wi = bs.wi[:, 0:1] * s + bs.wi[:, 1:2] * t + bs.wi[:, 2:3] * ns
@@ -365,6 +371,9 @@ class BDPT(AbstractIntegrator):
                 p=p,
                 ng=ng,
                 ns=ns,
+                s=s,
+                t=t,
+                geometry=frame.geometry,
                 wo=wo,
                 material=material,
                 uv=v.uv,
@@ -409,10 +418,15 @@ class BDPT(AbstractIntegrator):
         eye = jnp.broadcast_to(camera.to_world[:3, 3].astype(dtype), (n, 3))
 
         def endpoint(p, ng, beta, pdf_fwd, valid, has_n):
+            s, t = coordinate_system(ng)
+            geometry = HitGeometry(zero3, zero3, zero3) if scene.materials.needs_geometry else None
             return _Vertices(
                 p=p,
                 ng=ng,
                 ns=ng,
+                s=s,
+                t=t,
+                geometry=geometry,
                 wo=zero3,
                 material=jnp.zeros((n,), jnp.int32),
                 uv=jnp.zeros((n, scene.surface_width), dtype),
@@ -710,12 +724,11 @@ def _scale(scene, p):
 def _bsdf_eval(scene, v: _Vertices, wi, wl, mode):
     """The BSDF of the vertices `v` from their `wo` to the world directions `wi`: `f (n, k)`,
     the density of sampling `wi` given `wo` and that of `wo` given `wi` (solid angle)."""
-    s, t = coordinate_system(v.ns)
 
     def to_local(w):
-        return jnp.stack([dot(w, s), dot(w, t), dot(w, v.ns)], axis=-1)
+        return jnp.stack([dot(w, v.s), dot(w, v.t), dot(w, v.ns)], axis=-1)
 
     wo_l, wi_l = to_local(v.wo), to_local(wi)
-    bsdf = scene.materials.bxdf(v.material, wl, v.uv)
+    bsdf = scene.materials.bxdf(v.material, wl, v.uv, v.geometry)
     f = bsdf.f(wo_l, wi_l, mode=mode)
     return f, bsdf.pdf(wo_l, wi_l), bsdf.pdf(wi_l, wo_l)

@@ -69,9 +69,8 @@ import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
 from ..._math import dot
-from ...scattering import coordinate_system
 from ._base import AbstractIntegrator, check_path_fields, scene_max_depth
-from ._path import _offset, _vertex, shadow_ray
+from ._path import _offset, _vertex, shading_frame, shadow_ray
 
 __all__ = ["PTracer", "Splats", "ptracer_sample_dimensions"]
 
@@ -222,20 +221,12 @@ class PTracer(AbstractIntegrator):
             o, d, beta, alive, hero_only = state
             v = _vertex(scene, o, d)
             alive = alive & v.valid
-            material = scene.face_material[v.face]
-            two_sided = scene.materials.two_sided[material]
-            transmissive = scene.materials.transmissive[material]
-            front = v.cos_o > 0
-            ns = jnp.where((two_sided & ~front & ~transmissive)[:, None], -v.ns, v.ns)
-            alive = alive & (front | two_sided | transmissive)
-            s, t = coordinate_system(ns)
-
-            def to_local(w):
-                return jnp.stack([dot(w, s), dot(w, t), dot(w, ns)], axis=-1)
-
+            frame = shading_frame(scene, v)
+            alive = alive & frame.scatters
+            to_local = frame.to_local
             wo = -d  # towards the light
             wo_l = to_local(wo)
-            bsdf = scene.materials.bxdf(material, wavelength_nm, v.uv)
+            bsdf = scene.materials.bxdf(frame.material, wavelength_nm, v.uv, frame.geometry)
             wo_ng = jnp.abs(dot(wo, v.n))
             wo_ng = jnp.where(wo_ng > 0, wo_ng, 1.0)
 
@@ -254,7 +245,7 @@ class PTracer(AbstractIntegrator):
             u = variates(_EMISSION_DIMENSIONS + _DIMENSIONS_PER_VERTEX * (i - 1), 4, paths)
             u = u.astype(dtype)
             bs = bsdf.sample_f(wo_l, u[:, 2], u[:, 0:2], mode="importance")
-            wi = bs.wi[:, 0:1] * s + bs.wi[:, 1:2] * t + bs.wi[:, 2:3] * ns
+            wi = frame.to_world(bs.wi)
             wi = wi / jnp.sqrt(jnp.maximum(dot(wi, wi), jnp.finfo(dtype).tiny))[:, None]
             alive = alive & (bs.pdf > 0) & (i < self.max_depth - 1)
             corr = jnp.abs(wo_l[:, 2]) * jnp.abs(dot(wi, v.n)) / wo_ng
