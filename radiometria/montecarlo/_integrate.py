@@ -9,6 +9,7 @@ Both build on the `Estimate` of `_estimators.py`.
 References: `Owen2013` (ch. 2 plain MC, 17 randomised QMC), `Owen1997`, `Pharr2023` (§2.1).
 """
 
+import functools
 from collections.abc import Callable, Sequence
 
 import equinox as eqx
@@ -196,14 +197,19 @@ def convergence_study(
             c = jnp.cumsum(y, axis=0)
             return jnp.stack([c[m - 1] / m for m in ns]) - exact
 
-        errs = jax.vmap(prefix_errors)(keys)  # (r, len(ns))
+        # Replicates in vmapped batches of 8: the points of all r replicates at once would
+        # hold r x n_max x dim scrambled coordinates and their intermediates (GBs at 2^14).
+        errs = jax.lax.map(prefix_errors, keys, batch_size=min(r, 8))  # (r, len(ns))
     else:
-        cols = []
-        for m in ns:
-            cols.append(
-                jax.vmap(lambda k, m=m: jnp.mean(_values(f, _unit_points(method, m, d, k))))(keys)
-            )
-        errs = jnp.stack(cols, axis=1) - exact
+        # One compiled program per n (the point sets differ in shape), replicates in batches.
+        @functools.partial(jax.jit, static_argnums=0)
+        def means(m, keys):
+            def one(k):
+                return jnp.mean(_values(f, _unit_points(method, m, d, k)))
+
+            return jax.lax.map(one, keys, batch_size=min(r, 8))
+
+        errs = jnp.stack([means(m, keys) for m in ns], axis=1) - exact
     rmse = jnp.sqrt(jnp.mean(errs**2, axis=0))
     logn = jnp.log(jnp.asarray(ns, dtype=rmse.dtype))
     slope, intercept = jnp.polyfit(logn, jnp.log(rmse), 1)
