@@ -20,9 +20,11 @@ Cornell box at its own 256 x 256 film (Mitsuba 3's `cornell_box()`; radiometria'
    from the compilation cache, its first dispatch.
 3. **Warm process** (goal 3): `bench_render.py`'s in-process time to equal error, radiometria
    (Owen-Sobol) against `llvm_ad_spectral`.
-4. **Memory** (goal 5): peak resident memory (`ru_maxrss` of the child, as
-   `/usr/bin/time -v` reports it) of `radiometria demo` and of 1920 x 1080 renders at two
-   sample counts.
+4. **Memory** (goal 5): peak resident memory of `radiometria demo` and of 1920 x 1080
+   renders at two sample counts: the larger of `ru_maxrss` (the largest single process, as
+   `/usr/bin/time -v` reports it) and, on Linux, the peak of the process tree's summed
+   proportional set size (PSS, sampled every 50 ms): the demo runs its render and each
+   figure in a process of its own beside the launching one.
 
     .venv/bin/python benchmarks/bench_startup.py [--spps 4 16 64] [--skip-demo] [--quick]
 
@@ -37,6 +39,7 @@ import subprocess
 import sys
 import tempfile
 import textwrap
+import threading
 import time
 from pathlib import Path
 
@@ -72,20 +75,47 @@ _MITSUBA = textwrap.dedent(
 )
 
 
+def _tree_pss_kib(pid: int) -> int:
+    """Summed proportional set size of a process and its descendants [KiB] (Linux /proc; 0
+    where it cannot be read)."""
+    total, stack = 0, [pid]
+    while stack:
+        p = stack.pop()
+        try:
+            rollup = Path(f"/proc/{p}/smaps_rollup").read_text()
+            total += int(re.search(r"^Pss:\s+(\d+)", rollup, re.M).group(1))
+            for task in os.listdir(f"/proc/{p}/task"):
+                stack += map(int, Path(f"/proc/{p}/task/{task}/children").read_text().split())
+        except (OSError, AttributeError, ValueError):
+            continue
+    return total
+
+
 def _run(argv, env=None):
-    """Run a child process; (wall seconds, peak RSS in MiB, stderr)."""
+    """Run a child process; (wall seconds, peak memory in MiB, stderr). Peak memory is the
+    larger of the child's `ru_maxrss` and its process tree's peak summed PSS."""
     env = {**os.environ, **(env or {}), "BENCH_T0": repr(time.time())}
     t0 = time.perf_counter()
     proc = subprocess.Popen(
         argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
     )
+    peak, done = [0], threading.Event()
+
+    def sample():
+        while not done.wait(0.05):
+            peak[0] = max(peak[0], _tree_pss_kib(proc.pid))
+
+    sampler = threading.Thread(target=sample, daemon=True)
+    sampler.start()
     err = proc.stderr.read()
+    done.set()
+    sampler.join()
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
     seconds = time.perf_counter() - t0
     if proc.returncode != 0:
         raise RuntimeError(f"{argv} failed ({proc.returncode}):\n{err[-3000:]}")
-    return seconds, usage.ru_maxrss / 1024, err
+    return seconds, max(usage.ru_maxrss, peak[0]) / 1024, err
 
 
 def _first_step(err: str) -> float | None:

@@ -148,6 +148,41 @@ def test_demo_render_smoke(tmp_path):
     assert rgb.shape == (32, 32, 3) and np.all(np.isfinite(rgb))
 
 
+def test_figures_command_writes_figures_from_processes_of_their_own(tmp_path, capsys):
+    """`figures` makes each figure in a fresh process (memory goes back when it ends) and
+    prints what they wrote; an unknown name is one error line and exit 2, nothing written."""
+    assert main(["figures", "--only", "fig_1_planck", "--smoke", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out.split()
+    assert sorted(Path(p).name for p in printed) == ["fig_1_planck.pdf", "fig_1_planck.png"]
+    assert all(Path(p).stat().st_size > 0 for p in printed)
+    assert main(["figures", "--only", "fig_nope", "--out", str(tmp_path / "none")]) == 2
+    err = capsys.readouterr().err
+    assert "fig_nope" in err and "fig_1_planck" in err and not (tmp_path / "none").exists()
+
+
+def test_isolated_work_runs_in_fresh_processes_and_restores_the_environment(monkeypatch):
+    from radiometria.cli import _Isolated
+
+    monkeypatch.delenv("MALLOC_ARENA_MAX", raising=False)
+    with _Isolated(cache=False) as isolated:
+        first, second = isolated.run(os.getpid), isolated.run(os.getpid)
+        assert len({first, second, os.getpid()}) == 3  # a new process for each unit of work
+        assert isolated.run(_environment_variable, "MALLOC_ARENA_MAX") == "1"
+        with pytest.raises(ValueError, match="figure"):  # the work's own error, unchanged
+            isolated.run(_unknown_figure)
+    assert "MALLOC_ARENA_MAX" not in os.environ
+
+
+def _environment_variable(name):
+    return os.environ.get(name)
+
+
+def _unknown_figure():
+    from radiometria.cli import _figure_names
+
+    return _figure_names(["fig_nope"])
+
+
 def test_cpu_devices_flag_sets_xla_count_once(monkeypatch):
     from radiometria.cli import _configure_cpu_devices
 
