@@ -644,25 +644,29 @@ def run_entry(
     return image, spp_reached(passes, n_tiles, done, spp), stopped
 
 
-_RECORDING: list[set] = []
+_RECORDING: list[tuple[int, set]] = []  # (thread, files) of each open recording
 _HOOKED: list[bool] = []
 
 
 def _audit(event: str, args) -> None:
     if event == "open" and _RECORDING and isinstance(args[0], str | bytes | os.PathLike):
-        _RECORDING[-1].add(os.path.abspath(os.fsdecode(args[0])))
+        thread, files = _RECORDING[-1]
+        if threading.get_ident() == thread:
+            files.add(os.path.abspath(os.fsdecode(args[0])))
 
 
 @contextlib.contextmanager
 def recording_opened_files():
     """Within `with`: the set it yields collects every file opened (Python's `open` audit
-    event), less radiometria's own and the Python installation's files (the request's versions
-    cover those); what a scene reads besides its own file (meshes, textures)."""
+    event) by the thread that entered it, less radiometria's own and the Python installation's
+    files (the request's versions cover those); what a scene reads besides its own file
+    (meshes, textures). Other threads' files are not the scene's: the native kernel's
+    background build (`prebuild`) reads `/proc/cpuinfo`, whose clock readings change."""
     if not _HOOKED:
         sys.addaudithook(_audit)
         _HOOKED.append(True)
     files: set = set()
-    _RECORDING.append(files)
+    _RECORDING.append((threading.get_ident(), files))
     try:
         yield files
     finally:

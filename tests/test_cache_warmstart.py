@@ -204,3 +204,19 @@ def test_cache_info_and_clear_cover_the_step_entries(tmp_path, capsys):
     assert "1 render steps" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
     assert clear_compilation_cache(tmp_path) == 0
+
+
+def test_the_scene_files_recorded_are_those_its_own_thread_opens(tmp_path):
+    """A step entry depends on the files the scene read; a file another thread opens meanwhile
+    (the native kernel's background build reads /proc/cpuinfo) is not one of them."""
+    import threading
+
+    mine, theirs = tmp_path / "mesh.ply", tmp_path / "other.txt"
+    mine.write_bytes(b"ply")
+    theirs.write_text("x")
+    with warm.recording_opened_files() as read:
+        mine.read_bytes()
+        reader = threading.Thread(target=theirs.read_text)
+        reader.start()
+        reader.join()
+    assert read == {str(mine)}

@@ -145,3 +145,44 @@ def test_fresh_cache_compiles_the_kernel_atomically(tmp_path):
     assert "(True, 'compiled and loaded') native [True, True]" in out.stdout, out.stderr
     files = sorted(p.name for p in tmp_path.iterdir())
     assert len(files) == 1 and files[0].startswith("bvh_traverse-") and files[0].endswith(".so")
+
+
+_PREBUILD_PROBE = (
+    """
+import threading
+from radiometria.render._geometry import _native
+_native.prebuild()
+started = [t.name for t in threading.enumerate()].count("radiometria-native-build")
+_native.prebuild()  # once per process: no second build
+again = [t.name for t in threading.enumerate()].count("radiometria-native-build")
+"""
+    + _PROBE.split("\n", 1)[1]
+    + """
+print("threads", started, again)
+"""
+)
+
+
+@pytest.mark.skipif(not _HAS_COMPILER, reason="no C++ compiler")
+def test_prebuild_compiles_the_two_halves_in_the_background_and_load_waits(tmp_path):
+    """`prebuild` starts one build thread; `_load` takes its library (the two translation
+    units, float32 and float64, linked into one with all eight handlers) and queries run."""
+    out = _run(_PREBUILD_PROBE, RADIOMETRIA_CACHE_DIR=str(tmp_path))
+    assert "(True, 'compiled and loaded') native [True, True]" in out.stdout, out.stderr
+    assert "threads 1 " in out.stdout and out.stdout.split()[-1] in ("0", "1"), out.stdout
+    (lib,) = tmp_path.iterdir()
+    nm = shutil.which("nm")
+    if nm is not None:
+        symbols = subprocess.run([nm, "-D", str(lib)], capture_output=True, text=True).stdout
+        for kind in ("Bvh", "Brute"):
+            for hit in ("Closest", "Any"):
+                for bits in ("32", "64"):
+                    assert f"Radiometria{kind}{hit}F{bits}" in symbols
+
+
+def test_a_failed_background_build_falls_back_with_its_reason(tmp_path):
+    """A compiler that fails (`CXX=false`) in `prebuild`'s thread: `_load` reports the failure
+    and the JAX traversal answers the queries."""
+    out = _run(_PREBUILD_PROBE, RADIOMETRIA_CACHE_DIR=str(tmp_path), CXX="false")
+    assert "(False, 'build or load failed:" in out.stdout, out.stderr
+    assert "jax [True, True]" in out.stdout and not list(tmp_path.iterdir())

@@ -497,19 +497,26 @@ constexpr auto bind() {
 
 }  // namespace
 
+// The float32 and float64 handlers can be compiled as two translation units in parallel
+// (-DRADIOMETRIA_PART=32 and =64, linked together: `_native._build`); without the macro
+// this one file defines all eight.
+#if !defined(RADIOMETRIA_PART) || RADIOMETRIA_PART == 32
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhClosestF32, (query<ffi::F32, false>),
                               (bind<ffi::F32, false>()));
-XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhClosestF64, (query<ffi::F64, false>),
-                              (bind<ffi::F64, false>()));
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhAnyF32, (query<ffi::F32, true>),
                               (bind<ffi::F32, true>()));
-XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhAnyF64, (query<ffi::F64, true>),
-                              (bind<ffi::F64, true>()));
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteClosestF32, (brute<ffi::F32, false>),
                               (bind_brute<ffi::F32>()));
-XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteClosestF64, (brute<ffi::F64, false>),
-                              (bind_brute<ffi::F64>()));
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteAnyF32, (brute<ffi::F32, true>),
                               (bind_brute<ffi::F32>()));
+#endif
+#if !defined(RADIOMETRIA_PART) || RADIOMETRIA_PART == 64
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhClosestF64, (query<ffi::F64, false>),
+                              (bind<ffi::F64, false>()));
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhAnyF64, (query<ffi::F64, true>),
+                              (bind<ffi::F64, true>()));
+XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteClosestF64, (brute<ffi::F64, false>),
+                              (bind_brute<ffi::F64>()));
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBruteAnyF64, (brute<ffi::F64, true>),
                               (bind_brute<ffi::F64>()));
+#endif
