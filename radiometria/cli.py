@@ -165,8 +165,11 @@ def _render(args: argparse.Namespace) -> int:
     """`radiometria render`: from the step cache when it holds this render (a warm start that
     imports neither the renderer nor its plugins, `radiometria._warmstart`), else through the
     renderer, which writes the entry for the next time."""
-    from . import _warmstart as warm
+    from . import _native_build, _warmstart as warm
 
+    # The ray-casting kernels' library compiles (first run only: else it is found in the
+    # cache) while JAX and the renderer are imported and the scene loads.
+    _native_build.prebuild()
     step_cache = None
     if not (args.no_cache or warm.cache_disabled() or args.resume or args.preview_every):
         opts = warm.render_settings(args)  # bad arguments fail here, before any lookup

@@ -35,7 +35,6 @@ from ._cache import (
 )
 from ._checkpoint import save_checkpoint as save_checkpoint  # the warm start's checkpoints
 from ._driver import RenderInterrupted, render
-from ._geometry._native import prebuild
 from ._integrators import AbstractIntegrator
 from ._registry import SAMPLERS
 from ._scenes import compile_scene, load_scene, scene_integrator, scene_sampler
@@ -101,7 +100,6 @@ def _render_to(
             f"-D {next(iter(params))}=... sets a Mitsuba XML <default>; {str(scene_name)!r} "
             "is not an .xml scene."
         )
-    prebuild()  # the ray-casting kernel compiles (first run only) while the scene loads
     if timing_enabled():
         jax_activity.start()
         mark("command checked" + jax_activity.summary())

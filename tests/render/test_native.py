@@ -150,7 +150,7 @@ def test_fresh_cache_compiles_the_kernel_atomically(tmp_path):
 _PREBUILD_PROBE = (
     """
 import threading
-from radiometria.render._geometry import _native
+from radiometria import _native_build as _native
 _native.prebuild()
 started = [t.name for t in threading.enumerate()].count("radiometria-native-build")
 _native.prebuild()  # once per process: no second build

@@ -13,148 +13,35 @@ taken through the hit point recomputed from `prim` and the barycentrics). On oth
 (GPU, TPU) the JAX traversal runs. `NativeCPUTraversal` is the back end (see `_backends.py`)
 that runs these kernels.
 
-The kernel is compiled on first use with the system's C++ compiler (`$CXX`, else `c++`,
-`g++` or `clang++`) against the FFI headers that ship with jaxlib (`jax.ffi.include_dir()`),
-and cached in `$RADIOMETRIA_CACHE_DIR` (default `$XDG_CACHE_HOME/radiometria`, else
-`~/.cache/radiometria`) under a name that hashes the source, the flags, the compiler, jaxlib
-and the host CPU. The float32 and float64 kernels are compiled as two translation units at
-once (2.3 s instead of 4.2 s on 2 cores), and `prebuild()` starts the build in a background
-thread so that the compiler runs while a scene loads (the command line calls it). The
-library is written to a temporary file and renamed into place
-(`radiometria._io.atomic_write_path`), so concurrent processes never load a partial file. The
-outcome of the first build and load is kept for the process (`_load`). Without a compiler, or
+The kernel is compiled on first use with the system's C++ compiler against the FFI headers
+that ship with jaxlib, and cached (`radiometria._native_build`, which needs no JAX: the
+command line starts the build with `prebuild()` before it imports JAX, so that a first
+render's compiler runs beside the imports and the scene's loading). The outcome of the
+first build and load is kept for the process (`_load`). Without a compiler, or
 with `RADIOMETRIA_NATIVE=0`, `native_status()` says why and the JAX traversal is used.
 """
 
 import ctypes
 import functools
-import hashlib
-import os
-import platform
-import shutil
-import subprocess
-import tempfile
-import threading
-from concurrent.futures import Future
-from pathlib import Path
 from typing import ClassVar, NamedTuple
 
 import jax
 import jax.numpy as jnp
-import jaxlib
 import numpy as np
 from jax import lax
 
-from ..._io import atomic_write_path, default_file_mode
+from ..._native_build import compiler, disabled, library_path
 from ._backends import AbstractTraversalBackend
 from ._triangle import Hit, _sorted_corners
 
 __all__ = ["NativeCPUTraversal", "native_status"]
 
-_SOURCE = Path(__file__).with_name("_csrc") / "bvh_traverse.cc"
-# -ffp-contract=off: no fused multiply-adds, every operation rounds as written (the results do
-# not depend on the compiler); -fno-trapping-math lets the brute force's branch-free loop be
-# vectorised (it changes no result, only what may be assumed about floating-point traps).
-_FLAGS = (
-    "-O3",
-    "-std=c++17",
-    "-shared",
-    "-fPIC",
-    "-ffp-contract=off",
-    "-fno-trapping-math",
-    "-march=native",
-)
 _SYMBOLS = {
     (kind, any_hit, dtype): f"Radiometria{kind}{'Any' if any_hit else 'Closest'}F{dtype[-2:]}"
     for kind in ("Bvh", "Brute")
     for any_hit in (False, True)
     for dtype in ("float32", "float64")
 }
-
-
-def _compiler() -> str | None:
-    for name in (os.environ.get("CXX"), "c++", "g++", "clang++"):
-        if name and (path := shutil.which(name)):
-            return path
-    return None
-
-
-def _cache_dir() -> Path:
-    if os.environ.get("RADIOMETRIA_CACHE_DIR"):
-        return Path(os.environ["RADIOMETRIA_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "radiometria"
-
-
-def _cpu_signature() -> str:
-    """The host CPU's model and feature flags (the library is built with -march=native)."""
-    try:
-        with open("/proc/cpuinfo") as fh:
-            lines = [ln for ln in fh if ln.startswith(("model name", "flags"))]
-        return "".join(sorted(set(lines)))
-    except OSError:
-        return platform.processor() + platform.machine()
-
-
-def _build(cxx: str) -> Path:
-    """Compile the kernel (or find it in the cache) and return the shared library's path."""
-    include = jax.ffi.include_dir()
-    version = subprocess.run(
-        [cxx, "--version"], capture_output=True, text=True, timeout=60, check=False
-    ).stdout
-    key = hashlib.sha256(
-        b"\0".join(
-            s.encode()
-            for s in (
-                _SOURCE.read_text(),
-                " ".join(_FLAGS),
-                version,
-                jaxlib.__version__,
-                _cpu_signature(),
-            )
-        )
-    ).hexdigest()[:20]
-    cache = _cache_dir()
-    target = cache / f"bvh_traverse-{key}.so"
-    if target.exists():
-        return target
-    try:
-        cache.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        cache = Path(tempfile.gettempdir()) / "radiometria"
-        cache.mkdir(parents=True, exist_ok=True)
-        target = cache / target.name
-        if target.exists():
-            return target
-
-    def compile_to(tmp: str) -> None:
-        # The two halves of the kernels (float32, float64) as two translation units compiled
-        # at once, then linked: the FFI headers' parsing and the code generation take most of
-        # the time, and each half needs half of the latter.
-        flags = [f for f in _FLAGS if f != "-shared"]
-        with tempfile.TemporaryDirectory() as work:
-            objects = [os.path.join(work, f"part{part}.o") for part in (32, 64)]
-            cmds = [
-                [cxx, *flags, f"-DRADIOMETRIA_PART={part}", f"-I{include}", "-c", str(_SOURCE),
-                 "-o", obj]
-                for part, obj in zip((32, 64), objects, strict=True)
-            ]  # fmt: skip
-            procs = [
-                subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-                for cmd in cmds
-            ]
-            errors = [proc.communicate(timeout=600)[1] for proc in procs]
-            for cmd, proc, err in zip(cmds, procs, errors, strict=True):
-                if proc.returncode != 0:
-                    raise RuntimeError(f"`{' '.join(cmd)}` failed:\n{err[-4000:]}")
-            cmd = [cxx, "-shared", "-fPIC", *objects, "-o", tmp]
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600, check=False)
-            if proc.returncode != 0:
-                raise RuntimeError(f"`{' '.join(cmd)}` failed:\n{proc.stderr[-4000:]}")
-
-    # atomic: other processes see the whole library or none
-    atomic_write_path(target, compile_to, mode=default_file_mode(executable=True))
-    return target
 
 
 class _NativeLibrary(NamedTuple):
@@ -165,48 +52,15 @@ class _NativeLibrary(NamedTuple):
     lib: ctypes.CDLL | None  # the loaded library (held so that it stays loaded)
 
 
-def _disabled() -> bool:
-    return os.environ.get("RADIOMETRIA_NATIVE", "1").strip().lower() in ("0", "false", "no")
-
-
-_prebuilt: Future | None = None  # the library's path, from `prebuild`'s thread
-_prebuild_lock = threading.Lock()
-
-
-def prebuild() -> None:
-    """Start building the kernel library (or finding it in the cache) in a background thread,
-    once per process; the first `_load` waits for it. The compiler then runs while the caller
-    does other work (the command line: loading and compiling the scene, about 1 s of a first
-    run's 4 s of compiling). Does nothing when the kernels are disabled or no compiler is
-    found (`_load` says why), and when JAX's default backend is not the CPU (the kernels
-    serve CPU renders only)."""
-    global _prebuilt
-    with _prebuild_lock:
-        if _prebuilt is not None or _disabled() or (cxx := _compiler()) is None:
-            return
-        if jax.default_backend() != "cpu":
-            return
-        future: Future = Future()
-
-        def build() -> None:
-            try:
-                future.set_result(_build(cxx))
-            except BaseException as e:  # noqa: BLE001 - re-raised by `_load`
-                future.set_exception(e)
-
-        threading.Thread(target=build, name="radiometria-native-build", daemon=True).start()
-        _prebuilt = future
-
-
 @functools.cache
 def _load() -> _NativeLibrary:
     """Build, load and register the kernels, once per process (later calls return the result)."""
-    if _disabled():
+    if disabled():
         return _NativeLibrary(False, "disabled by RADIOMETRIA_NATIVE=0", None)
-    if (cxx := _compiler()) is None:
+    if (cxx := compiler()) is None:
         return _NativeLibrary(False, "no C++ compiler found ($CXX, c++, g++, clang++)", None)
     try:
-        path = _prebuilt.result() if _prebuilt is not None else _build(cxx)
+        path = library_path(cxx)
         lib = ctypes.cdll.LoadLibrary(str(path))
         for symbol in _SYMBOLS.values():
             jax.ffi.register_ffi_target(

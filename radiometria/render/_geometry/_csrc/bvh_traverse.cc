@@ -498,7 +498,7 @@ constexpr auto bind() {
 }  // namespace
 
 // The float32 and float64 handlers can be compiled as two translation units in parallel
-// (-DRADIOMETRIA_PART=32 and =64, linked together: `_native._build`); without the macro
+// (-DRADIOMETRIA_PART=32 and =64, linked together: `radiometria._native_build.build`); without the macro
 // this one file defines all eight.
 #if !defined(RADIOMETRIA_PART) || RADIOMETRIA_PART == 32
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhClosestF32, (query<ffi::F32, false>),
