@@ -182,8 +182,12 @@ def _rect_solid_angle():
     return sum(mc.spherical_triangle_area(*t) for t in _rect_triangles())
 
 
-def _rect_terms(method: str, n: int, key):
-    """Per-sample terms of the irradiance estimators (mean = E), shape (n,)."""
+CONTROL_VARIATE = "light area + control variate"
+
+
+def _rect_terms(method: str, n: int, key, *, cv_terms: bool = True):
+    """Per-sample terms of the irradiance estimators (mean = E), shape (n,). For the control
+    variate with `cv_terms=False`: its samples `(y, g)` (estimand and control), each (n,)."""
     (x0, x1), (y0, y1) = _RECT
     area = (x1 - x0) * (y1 - y0)
 
@@ -243,27 +247,45 @@ def _rect_terms(method: str, n: int, key):
             okc, mc.mis_weights(pc, beta=beta)[:, 1] * f(wc) / jnp.where(okc, pc[:, 1], 1.0), 0.0
         )
         return tl + tc  # one sample of each strategy per term
-    if method == "light area + control variate":
+    if method == CONTROL_VARIATE:
         # Control G = A cos_l / d^2 on the same light samples; E[G] = solid angle of the light.
         w = sample_light(u)
         y = f(w) / light_pdf_sa(w)
         g = 1.0 / light_pdf_sa(w)
-        omega = _rect_solid_angle()
-        est = mc.control_variate(y, g, omega)
-        beta = (jnp.mean(y) - est.mean) / (jnp.mean(g) - omega)
-        return y - beta * (g - omega)  # terms whose mean is the CV estimate
+        return _control_variate_terms(y, g) if cv_terms else (y, g)
     raise ValueError(method)
 
 
-# One compiled program per method and sample count (run op by op, the many small programs
-# of the estimators held ~0.7 GB of compiled code and buffers).
+def _control_variate_terms(y, g):
+    """Terms whose mean is the control-variate estimate from these samples (`mc.control_variate`
+    with the rectangle's solid angle as the control's mean, beta fitted on them)."""
+    omega = _rect_solid_angle()
+    est = mc.control_variate(y, g, omega)
+    beta = (jnp.mean(y) - est.mean) / (jnp.mean(g) - omega)
+    return y - beta * (g - omega)
+
+
+# One compiled program per method (run op by op, the many small programs of the estimators
+# held ~0.7 GB of compiled code and buffers; one per method and sample count took 19 s to
+# compile in smoke mode).
 _rect_terms_jit = jax.jit(_rect_terms, static_argnums=(0, 1))
 
 
-@functools.partial(jax.jit, static_argnames=("method", "n", "reps"))
-def _rect_means(key, *, method: str, n: int, reps: int):
-    """The means of `n` terms of `method` over `reps` independent replicates."""
-    return jax.vmap(lambda k: _rect_terms(method, n, k).mean())(jax.random.split(key, reps))
+@functools.partial(jax.jit, static_argnames=("method", "ns", "reps"))
+def _rect_estimates(key, *, method: str, ns: tuple[int, ...], reps: int):
+    """`(reps, len(ns))`: in each of `reps` independent replicates of `max(ns)` samples, the
+    estimate of `method` from its first `n` samples, for each `n` of `ns` (the first `n` of
+    i.i.d. samples are `n` i.i.d. samples; the control variate fits its beta on them).
+    Replicates in batches of 32 (memory)."""
+
+    def one(k):
+        if method == CONTROL_VARIATE:
+            y, g = _rect_terms(method, max(ns), k, cv_terms=False)
+            return jnp.stack([_control_variate_terms(y[:n], g[:n]).mean() for n in ns])
+        c = jnp.cumsum(_rect_terms(method, max(ns), k))
+        return jnp.stack([c[n - 1] / n for n in ns])
+
+    return jax.lax.map(one, jax.random.split(key, reps), batch_size=min(reps, 32))
 
 
 RECT_METHODS = [
@@ -273,7 +295,7 @@ RECT_METHODS = [
     "spherical triangles",
     "MIS balance (light + cosine)",
     "MIS power (light + cosine)",
-    "light area + control variate",
+    CONTROL_VARIATE,
 ]
 
 
@@ -282,9 +304,10 @@ def variance_reduction_data(*, smoke: bool = False) -> dict:
 
     `exact` = `rect_irradiance_exact()`; `methods` = `RECT_METHODS`; `ns`, the sample counts
     (4 ... 256 in smoke mode, else 4 ... 4096); `n_replicates` (32 or 256); `rmse` (methods,
-    ns), the RMSE of the mean of `n` terms over independent replicates; `n_var` (20 000 or
-    200 000) and `per_sample_var` (methods,), the variance of one term of each estimator
-    (key 7, split in turn for every estimate).
+    ns), the RMSE over independent replicates of the estimate from `n` samples (each
+    replicate draws `max(ns)` samples; its estimate at `n` uses the first `n`); `n_var`
+    (20 000 or 200 000) and `per_sample_var` (methods,), the variance of one term of each
+    estimator (key 7, split in turn for every estimate).
     """
     exact = rect_irradiance_exact()
     ns = [4, 16, 64, 256] if smoke else [4, 16, 64, 256, 1024, 4096]
@@ -293,12 +316,9 @@ def variance_reduction_data(*, smoke: bool = False) -> dict:
     key = jax.random.key(7)
     rmse, per_sample_var = [], []
     for method in RECT_METHODS:
-        row = []
-        for m in ns:
-            key, sub = jax.random.split(key)
-            ests = _rect_means(sub, method=method, n=m, reps=reps)
-            row.append(float(np.sqrt(np.mean((np.asarray(ests) - exact) ** 2))))
-        rmse.append(row)
+        key, sub = jax.random.split(key)
+        ests = np.asarray(_rect_estimates(sub, method=method, ns=tuple(ns), reps=reps))
+        rmse.append(np.sqrt(np.mean((ests - exact) ** 2, axis=0)))
         key, sub = jax.random.split(key)
         terms = _rect_terms_jit(method, n_var, sub)
         per_sample_var.append(float(np.var(np.asarray(terms))))
