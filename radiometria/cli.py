@@ -60,9 +60,8 @@ class _Isolated:
     `MALLOC_ARENA_MAX=1` unless it is set: XLA's compiler threads each grew an arena of their
     own, and the bidirectional figure peaked at 958 MB with them, 815 MB with one (its time
     unchanged). Each process uses the persistent compilation cache unless `cache` is False.
-    An exception in the work
-    is raised here unchanged; a process that dies (killed, out of memory) raises
-    `RuntimeError` naming the work.
+    An exception in the work is raised here unchanged; a process that dies (killed, out of
+    memory) raises `RuntimeError` naming the work.
     """
 
     _ENV = {"MALLOC_ARENA_MAX": "1"}

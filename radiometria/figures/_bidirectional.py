@@ -106,8 +106,8 @@ def bidirectional_data(
     # bdpt first: its time at bdpt_spp is the budget. Each integrator's time is fitted as
     # fixed + per_spp x spp from timed renders at 16 and 64 spp after its compiling warm-up
     # (pssmlt's bootstrap is a fixed cost), and its sample count set to fit the budget.
-    # Compiled programs are dropped after each integrator (memory: `radiometria demo` renders
-    # every figure in one process).
+    # Compiled programs are dropped after each integrator (memory: four integrators' programs
+    # in one figure; the heap they freed serves the next one).
     images, spp, seconds = {}, {}, {}
     budget = reference = None
     lo, hi = 4 * quantum, 16 * quantum  # long enough to time on a busy CPU
