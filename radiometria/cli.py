@@ -61,7 +61,8 @@ class _Isolated:
     own, and the bidirectional figure peaked at 958 MB with them, 815 MB with one (its time
     unchanged). Each process uses the persistent compilation cache unless `cache` is False.
     An exception in the work is raised here unchanged; a process that dies (killed, out of
-    memory) raises `RuntimeError` naming the work.
+    memory) raises `RuntimeError` naming the work. Where no process pool can be made (no
+    POSIX semaphores), the work runs in the calling process, with a note on stderr.
     """
 
     _ENV = {"MALLOC_ARENA_MAX": "1"}
@@ -78,13 +79,22 @@ class _Isolated:
         for name, value in self._ENV.items():  # read by each process spawned from here on
             self.saved_env[name] = os.environ.get(name)
             os.environ.setdefault(name, value)
-        self.pool = ProcessPoolExecutor(
-            max_workers=1, mp_context=multiprocessing.get_context("spawn"), max_tasks_per_child=1
-        )
+        try:
+            self.pool = ProcessPoolExecutor(
+                max_workers=1,
+                mp_context=multiprocessing.get_context("spawn"),
+                max_tasks_per_child=1,
+            )
+        except (OSError, ImportError, NotImplementedError) as err:
+            # No process pool here (no POSIX semaphores, as in some sandboxes): the work runs
+            # in this process, as before, with the memory that costs.
+            print(f"radiometria: running in one process ({err})", file=sys.stderr)
+            self.pool = None
         return self
 
     def __exit__(self, *exc) -> None:
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        if self.pool is not None:
+            self.pool.shutdown(wait=True, cancel_futures=True)
         for name, value in self.saved_env.items():
             if value is None:
                 os.environ.pop(name, None)
@@ -94,6 +104,8 @@ class _Isolated:
     def run(self, fn, *args):
         from concurrent.futures.process import BrokenProcessPool
 
+        if self.pool is None:
+            return _in_child(fn, self.cache, *args)
         try:
             return self.pool.submit(_in_child, fn, self.cache, *args).result()
         except BrokenProcessPool as err:

@@ -173,6 +173,20 @@ def test_isolated_work_runs_in_fresh_processes_and_restores_the_environment(monk
     assert "MALLOC_ARENA_MAX" not in os.environ
 
 
+def test_isolated_work_runs_here_where_no_process_pool_can_be_made(monkeypatch, capsys):
+    import concurrent.futures
+
+    from radiometria.cli import _Isolated
+
+    def no_pool(*args, **kwargs):
+        raise OSError("no POSIX semaphores")
+
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", no_pool)
+    with _Isolated(cache=False) as isolated:
+        assert isolated.run(os.getpid) == os.getpid()
+    assert "running in one process (no POSIX semaphores)" in capsys.readouterr().err
+
+
 def _environment_variable(name):
     return os.environ.get(name)
 
