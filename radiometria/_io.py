@@ -30,6 +30,7 @@ __all__ = [
     "atomic_write",
     "atomic_write_bytes",
     "atomic_write_path",
+    "cache_root",
     "default_file_mode",
     "npz_bytes",
     "write_npz_deterministic",
@@ -39,6 +40,15 @@ __all__ = [
 NPZ_DATE_TIME = (1980, 1, 1, 0, 0, 0)
 # Unix permissions recorded in each member's external attributes (rw-r--r--).
 NPZ_MEMBER_MODE = 0o644
+
+
+def cache_root() -> Path:
+    """`$XDG_CACHE_HOME/radiometria`, else `~/.cache/radiometria` (XDG base directories; a
+    relative `$XDG_CACHE_HOME` is invalid and ignored): where the command line's step entries,
+    JAX's compiled programs and the native kernels' library are kept."""
+    base = os.environ.get("XDG_CACHE_HOME") or ""
+    root = Path(base) if os.path.isabs(base) else Path.home() / ".cache"
+    return root / "radiometria"
 
 
 def default_file_mode(*, executable: bool = False) -> int:

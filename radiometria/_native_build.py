@@ -6,10 +6,10 @@ imports JAX and the renderer (`prebuild`). The library is compiled with the syst
 compiler (`$CXX`, else `c++`, `g++` or `clang++`) against the FFI headers that ship with
 jaxlib, as two translation units at once (the float32 and the float64 kernels: 2.3 s instead
 of 4.2 s on 2 cores), linked into one, and cached in `$RADIOMETRIA_CACHE_DIR` (default
-`$XDG_CACHE_HOME/radiometria`, else `~/.cache/radiometria`) under a name that hashes the
-source, the flags, the compiler, jaxlib's version and the host CPU. It is written to a
-temporary file and renamed into place (`radiometria._io.atomic_write_path`), so concurrent
-processes never load a partial file.
+`radiometria._io.cache_root()`: `$XDG_CACHE_HOME/radiometria`, else `~/.cache/radiometria`)
+under a name that hashes the source, the flags, the compiler, jaxlib's version and the host
+CPU. It is written to a temporary file and renamed into place
+(`radiometria._io.atomic_write_path`), so concurrent processes never load a partial file.
 """
 
 import hashlib
@@ -24,7 +24,7 @@ import threading
 from concurrent.futures import Future
 from pathlib import Path
 
-from ._io import atomic_write_path, default_file_mode
+from ._io import atomic_write_path, cache_root, default_file_mode
 
 __all__ = ["FLAGS", "SOURCE", "build", "compiler", "disabled", "library_path", "prebuild"]
 
@@ -63,8 +63,7 @@ def _jaxlib_include_dir() -> str:
 def _cache_dir() -> Path:
     if os.environ.get("RADIOMETRIA_CACHE_DIR"):
         return Path(os.environ["RADIOMETRIA_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "radiometria"
+    return cache_root()
 
 
 def _cpu_signature() -> str:

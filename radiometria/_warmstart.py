@@ -67,7 +67,7 @@ from jax.experimental.compilation_cache import compilation_cache as _jax_cache
 from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from tqdm import tqdm
 
-from ._io import atomic_write
+from ._io import atomic_write, cache_root
 from ._timing import mark
 
 __all__ = [
@@ -99,14 +99,6 @@ _PREFIX, _SUFFIX = "step-", ".npz"
 _PACKAGE = Path(__file__).resolve().parent
 _ENV_KEYS = ("XLA_FLAGS", "EQX_ON_ERROR", "RADIOMETRIA_NATIVE", "JAX_ENABLE_X64")
 log = logging.getLogger("radiometria")
-
-
-def cache_root() -> Path:
-    """`$XDG_CACHE_HOME/radiometria`, else `~/.cache/radiometria` (XDG base directories; a
-    relative `$XDG_CACHE_HOME` is invalid and ignored)."""
-    base = os.environ.get("XDG_CACHE_HOME") or ""
-    root = Path(base) if os.path.isabs(base) else Path.home() / ".cache"
-    return root / "radiometria"
 
 
 def cache_disabled() -> bool:

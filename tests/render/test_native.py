@@ -150,10 +150,10 @@ def test_fresh_cache_compiles_the_kernel_atomically(tmp_path):
 _PREBUILD_PROBE = (
     """
 import threading
-from radiometria import _native_build as _native
-_native.prebuild()
+from radiometria import _native_build
+_native_build.prebuild()
 started = [t.name for t in threading.enumerate()].count("radiometria-native-build")
-_native.prebuild()  # once per process: no second build
+_native_build.prebuild()  # once per process: no second build
 again = [t.name for t in threading.enumerate()].count("radiometria-native-build")
 """
     + _PROBE.split("\n", 1)[1]
