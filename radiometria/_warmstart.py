@@ -69,6 +69,7 @@ from tqdm import tqdm
 
 from ._io import atomic_write, cache_root
 from ._timing import mark
+from ._xla import jit_options
 
 __all__ = [
     "NO_CACHE_ENV",
@@ -501,10 +502,17 @@ def uses_lapack(module_text: str) -> bool:
     return "lapack" in module_text.lower()
 
 
-def exported_caller(blob: bytes, *, donate: int = 0, lapack: bool = True) -> Callable:
+def exported_caller(
+    blob: bytes, *, donate: int = 0, lapack: bool = True, platform: str | None = None
+) -> Callable:
     """The deserialised `jax.export` program `blob` under `jax.jit`, donating its first
-    `donate` arguments; with `lapack=False` its lowering skips JAX's LAPACK set-up."""
-    call = jax.jit(jax_export.deserialize(bytearray(blob)).call, donate_argnums=range(donate))
+    `donate` arguments and compiled with the renderer's XLA options for `platform` (default:
+    JAX's default backend; `radiometria._xla`); with `lapack=False` its lowering skips JAX's
+    LAPACK set-up."""
+    options = jit_options(platform or jax.default_backend())
+    call = jax.jit(
+        jax_export.deserialize(bytearray(blob)).call, donate_argnums=range(donate), **options
+    )
     if lapack:
         return call
 
@@ -515,10 +523,12 @@ def exported_caller(blob: bytes, *, donate: int = 0, lapack: bool = True) -> Cal
     return call_without_lapack
 
 
-def exported_step_caller(blob: bytes, n_film: int, *, lapack: bool = True) -> Callable:
+def exported_step_caller(
+    blob: bytes, n_film: int, *, lapack: bool = True, platform: str | None = None
+) -> Callable:
     """`call(*film, *kernel, key_data, spp, pass_start, pixel) -> film` for a serialised step:
-    the deserialised program under `jax.jit`, donating the film's arrays."""
-    return exported_caller(blob, donate=n_film, lapack=lapack)
+    the deserialised program under `jax.jit` (`exported_caller`), donating the film's arrays."""
+    return exported_caller(blob, donate=n_film, lapack=lapack, platform=platform)
 
 
 def paths_of_step(n_pixels: int, tile: int, passes: int, n_tiles: int, i: int, spp: int) -> int:
@@ -593,8 +603,9 @@ def run_entry(
     kernel = [jax.device_put(x) for x in entry.kernel]
     film = [jax.device_put(x, replicated) for x in entry.film]
     key_data = jax.random.key_data(jax.random.key(int(seed)))
-    step = exported_step_caller(entry.step, len(film), lapack=meta["lapack"])
-    develop = exported_caller(entry.develop, lapack=meta["lapack"])
+    platform = devices[0].platform
+    step = exported_step_caller(entry.step, len(film), lapack=meta["lapack"], platform=platform)
+    develop = exported_caller(entry.develop, lapack=meta["lapack"], platform=platform)
     n_pixels, tile, passes, n_tiles = (meta[k] for k in ("n_pixels", "tile", "passes", "n_tiles"))
     n_steps = n_tiles * -(-spp // passes)
     spp_arr = np.int32(spp)

@@ -12,6 +12,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "radiometria"
 # design.md, "The house, floor by floor"; floor-1 private helpers are shared by every floor.
 FLOORS = {
     "constants": 1, "_checks": 1, "_types": 1, "_math": 1, "_io": 1, "_bits": 1, "_timing": 1,
+    "_xla": 1,
     "_native_build": 2,  # compiles the native kernels' library: no JAX, floor-1 helpers only
     "_warmstart": 2,  # the command line's warm start: JAX, NumPy and floor-1 helpers only
     "radiometry": 2, "montecarlo": 2,

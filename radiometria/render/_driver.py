@@ -64,6 +64,7 @@ from .._warmstart import (
     exported_step_caller,
     uses_lapack,
 )
+from .._xla import jit_options
 from ..camera import (
     AbstractCamera,
     AbstractFilter,
@@ -608,7 +609,7 @@ def render(
             )
     elif resume:
         raise ValueError("`resume=True` needs `checkpoint`, the file to resume from.")
-    step, develop = _step, _develop
+    step, develop = _step_program(devices[0].platform), _develop
     if _step_cache is not None and n_proc == 1 and not n_bins:  # the command line's warm start
         step, develop = _exported_step(_step_cache, kernel, cfg, plan, film, key, return_xyz)
     steps = range(proc + start, plan.n_steps, n_proc)
@@ -668,11 +669,6 @@ def render(
     if n_bins:
         return _result(film, return_xyz)
     return develop(film, "XYZ" if return_xyz else "sRGB")
-
-
-# One compiled program for the development (op by op, each of its operations would compile).
-_develop = eqx.filter_jit(film_develop)
-_develop_spectral = eqx.filter_jit(film_develop_spectral)
 
 
 def _result(film: Film, return_xyz: bool):
@@ -832,10 +828,42 @@ def _default_batch(devices) -> int:
     return per_device * len(devices)
 
 
-@functools.partial(jax.jit, static_argnames="cfg", donate_argnums=0)
+def _program(fun, platform: str, **jit_kw):
+    """`fun` under `jax.jit(**jit_kw)` with the renderer's XLA options for `platform`
+    (`radiometria._xla`), made once per function and platform, so that JAX's jit cache compiles
+    it once per static configuration."""
+    key = (fun, platform)
+    if key not in _PROGRAMS:
+        _PROGRAMS[key] = jax.jit(fun, **jit_kw, **jit_options(platform))
+    return _PROGRAMS[key]
+
+
+_PROGRAMS: dict = {}
+
+
+def _step_program(platform: str):
+    """`_step` compiled for `platform` (`_program`), donating the film."""
+    return _program(_step, platform, static_argnames="cfg", donate_argnums=0)
+
+
+def _develop(film: Film, space: str):
+    """`film_develop` as one compiled program (op by op, each of its operations would
+    compile), on the film's platform."""
+    return _program(film_develop, _platform(film), static_argnums=1)(film, space)
+
+
+def _develop_spectral(film: Film):
+    """`film_develop_spectral` as one compiled program, on the film's platform."""
+    return _program(film_develop_spectral, _platform(film))(film)
+
+
+def _platform(film: Film) -> str:
+    return next(iter(film.xyz_sum.devices())).platform
+
+
 def _step(film, kernel, key, spp, pass_start, pixel, *, cfg: _Config):
-    """One step `(film, kernel, key, spp, pass_start, pixel) -> film`, compiled once per `cfg`
-    and kernel structure (JAX's jit cache).
+    """One step `(film, kernel, key, spp, pass_start, pixel) -> film` (under `jax.jit`:
+    `_step_program`).
 
     The paths are traced under `jax.shard_map` over a 1-D mesh of `cfg.devices`, each device
     taking its share of the tile's pixels; their results are then added to the film (replicated
@@ -873,7 +901,7 @@ def _exported_step(save, kernel: _Kernel, cfg: _Config, plan: _Plan, film: Film,
         k = jax.tree_util.tree_unflatten(kernel_def, args[n_film : n_film + n_kernel])
         kd, spp, pass_start, pixel = args[n_film + n_kernel :]
         key_ = jax.random.wrap_key_data(kd)
-        out = _step.__wrapped__(f, k, key_, spp, pass_start, pixel, cfg=cfg)
+        out = _step(f, k, key_, spp, pass_start, pixel, cfg=cfg)
         return tuple(jax.tree_util.tree_leaves(out))
 
     def flat_develop(*leaves):
@@ -928,8 +956,9 @@ def _exported_step(save, kernel: _Kernel, cfg: _Config, plan: _Plan, film: Film,
         film=[np.asarray(x) for x in film_leaves],
         meta=meta,
     )
-    call_step = exported_step_caller(step_blob, n_film, lapack=lapack)
-    call_develop = exported_caller(develop_blob, lapack=lapack)
+    platform = cfg.devices[0].platform
+    call_step = exported_step_caller(step_blob, n_film, lapack=lapack, platform=platform)
+    call_develop = exported_caller(develop_blob, lapack=lapack, platform=platform)
 
     def step(film, kernel, key, spp, pass_start, pixel, *, cfg):
         leaves = jax.tree_util.tree_leaves(film)

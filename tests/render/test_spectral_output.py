@@ -120,11 +120,12 @@ def test_spectral_exr_follows_the_fichet_layout(outputs, spectral_image):
     assert header["emissiveUnits"] == "W.m^-2.sr^-1"
     assert int(header["spp_reached"]) == SPP and int(header["spectral_bins"]) == 47
     assert spectra.shape == (SIZE, SIZE, 47) and np.all(np.isfinite(spectra))
-    # The R, G, B preview is the RGB output of the same render, bit for bit: the spectral
-    # film changes nothing in the XYZ film.
+    # The R, G, B preview is the RGB output of the same render: the spectral film changes
+    # nothing in the XYZ film. (Up to float32 rounding: the two steps are different programs,
+    # and XLA may fuse, and so round, the same sums differently in each.)
     rgb, _ = _exr(outputs[1])
     rgb = np.stack([rgb[c] for c in "RGB"], axis=-1)
-    np.testing.assert_array_equal(preview, rgb)
+    np.testing.assert_allclose(preview, rgb, rtol=2e-6, atol=1e-12)
     try:  # colour-science's own reader needs OpenImageIO
         import OpenImageIO  # noqa: F401
     except ImportError:
