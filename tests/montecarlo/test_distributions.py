@@ -52,6 +52,71 @@ def test_piecewise_constant_2d_chi2_and_roundtrip():
     np.testing.assert_allclose(pdf, dist.pdf(p), rtol=1e-12)
 
 
+def _hostile_variates(cdf: np.ndarray, dtype, m: int) -> np.ndarray:
+    """Variates at and beside every CDF value and every cutpoint k/m, the ends, and random."""
+    points = np.concatenate([cdf, np.arange(m + 1) / m]).astype(dtype)
+    near = [points, np.nextafter(points, dtype(0)), np.nextafter(points, dtype(1))]
+    rand = np.random.default_rng(7).uniform(size=4000).astype(dtype)
+    u = np.concatenate(near + [rand, np.array([0.0, 1.0 - np.finfo(dtype).epsneg], dtype)])
+    return u[(u >= 0) & (u < 1)]
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize(
+    "table",
+    [
+        np.r_[np.zeros(40), 1.0, np.zeros(40)],  # one positive cell among zeros
+        np.r_[np.full(200, 1e-8), 1.0, 2.0, np.full(53, 1e-8)],  # a sun: 1e8 contrast
+        np.abs(np.sin(np.arange(257.0))) ** 6,  # many near-zero cells and ties at zero
+        np.ones(1),
+    ],
+    ids=["spike", "sun", "ripples", "one-cell"],
+)
+def test_guided_search_finds_what_a_plain_search_finds(table, dtype):
+    """The cutpoint tables change the work, never the answer: for every variate (also at,
+    just below and just above each CDF value and cutpoint) the interval is NumPy's
+    `searchsorted` on the same CDF, in 1D and in each row of 2D."""
+    from radiometria.montecarlo._distributions import _find_interval
+
+    dist1 = mc.PiecewiseConstant1D(jnp.asarray(table, dtype))
+    dist2 = mc.PiecewiseConstant2D(jnp.asarray(np.stack([table, table[::-1]]), dtype))
+    n = table.shape[0]
+    for cdf, guide, rows in (
+        (dist1.cdf[None, :], dist1.guide, [0]),
+        (dist2.conditional_cdf, dist2.conditional_guide, [0, 1]),
+    ):
+        assert guide is not None and guide.steps <= max(1, int(np.ceil(np.log2(n + 1))))
+        m = guide.lower.shape[-1] - 1
+        for r in rows:
+            c = np.asarray(cdf[r])
+            u = _hostile_variates(c, dtype, m)
+            row = jnp.full(u.shape, r, jnp.int32)
+            got = _find_interval(cdf, jnp.asarray(u), row, guide)
+            expected = np.clip(np.searchsorted(c, u, side="right") - 1, 0, n - 1)
+            np.testing.assert_array_equal(np.asarray(got), expected)
+            np.testing.assert_array_equal(np.asarray(_find_interval(cdf, jnp.asarray(u), row)),
+                                          expected)  # fmt: skip
+
+
+def test_guides_are_left_out_for_traced_tables_and_kept_small():
+    """Under `jit` (traced values) there is no guide and the full search serves; a large
+    table's guides stay within the budget (int16 indices, fewer cutpoints)."""
+    from radiometria.montecarlo import _distributions as dists
+
+    guides = []
+
+    def build(v):
+        guides.append(mc.PiecewiseConstant1D(v).guide)
+        return v
+
+    jax.jit(build)(TABLE_1D)
+    assert guides == [None]
+    big = dists._guide_tables(np.linspace(0.0, 1.0, 8193)[None, :].repeat(600, axis=0))
+    assert big.lower.dtype == jnp.int16 and big.steps <= 1
+    assert big.lower.nbytes + big.upper.nbytes <= dists._GUIDE_BYTES
+    assert big.lower.shape[-1] - 1 >= 8192  # never fewer cutpoints than cells
+
+
 def test_sample_discrete():
     w = jnp.array([1.0, 0.0, 3.0])
     idx, pmf, u2 = mc.sample_discrete(jax.random.uniform(jax.random.key(4), (100_000,)), w)
