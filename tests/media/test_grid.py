@@ -81,6 +81,19 @@ def test_ratio_tracking_through_a_ramp_grid_matches_the_closed_form_optical_dept
     assert np.all(np.abs(tr_h.mean(axis=0) - np.exp(-2.0 * half * s)) < 4 * se_h + 1e-4)
 
 
+def test_ratio_tracking_with_russian_roulette_stays_unbiased_in_a_thick_ramp():
+    """Optical depths 4 and 7 (T = 0.018 and 0.0009): estimates fall below 0.05 and play
+    Russian roulette (some end at exactly 0, which plain ratio tracking never gives here);
+    the mean is still the closed-form transmittance at both wavelengths."""
+    s = np.array([2.0, 3.5])
+    tau = _tau_ramp() * s
+    o, w, t_max, lam, u = _rays(N)
+    tr = np.asarray(_medium(s).transmittance(o, w, t_max, lam, u))
+    assert 0.05 < np.mean(np.all(tr == 0.0, axis=-1)) < 0.95  # roulette ended some walks
+    mean, se = tr.mean(axis=0), tr.std(axis=0) / np.sqrt(N)
+    assert np.all(np.abs(mean - np.exp(-tau)) < 4 * se + 1e-6), (mean, np.exp(-tau), se)
+
+
 def test_spectral_tracking_is_unbiased_at_every_wavelength():
     """E[w_j 1_no event] = T_j and E[w_j 1_event] = albedo (1 - T_j) for a constant albedo."""
     s = np.array([0.5, 1.5])
