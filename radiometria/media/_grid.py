@@ -41,11 +41,14 @@ $\hat T_j = e^{-\int\sigma_{c,j}\,\mathrm dt}\prod_i (1 - (\sigma_{t,j}(\mathbf 
 \sigma_{c,j})/\bar\mu_{r,c})$ (`Novak2014`; the control's optical depth is summed exactly
 over the cells crossed); a constant grid gets the exact transmittance, as a homogeneous medium
 does, and so does every cell of constant density. Once a path's estimate (the product so far
-times the control's transmittance so far, largest over the wavelengths) falls below 0.05, each
+times the control's transmittance so far, largest over the wavelengths) falls below 0.2, each
 further collision plays Russian roulette: the walk ends with probability 0.75 (estimate 0) or
-goes on with its weight divided by 0.25 (`Pharr2023` §14.2.2, pbrt-v4's shadow rays), which
-keeps it unbiased and ends the long walks through dense regions early (the `bench_media.py`
-heterogeneous scene: 64 spp in 15.0 s instead of 17.8 s, relMSE 1.256e-2 against 1.254e-2).
+goes on with its weight divided by 0.25 (pbrt-v4's shadow rays do so below 0.05, `Pharr2023`
+§14.2.2), which keeps it unbiased and ends the long walks through dense regions early. On the
+`bench_media.py` heterogeneous scene (256 x 256, 64 spp) the render took 17.8 s without it,
+15.0 s below 0.05, 13.5 s below 0.2 and 12.6 s below 0.5, with relMSE 1.254e-2, 1.256e-2,
+1.278e-2 and 1.361e-2: 0.2 gives about the time to equal error of 0.5 with a quarter of its
+added variance.
 
 **Variates.** The interface hands one variate per path (`u[:, 0]`, with `u[:, 1]` mixed in
 where given); the tracking steps draw theirs (the optical depth to the next collision, and
@@ -195,7 +198,7 @@ def coarse_majorant_grid(
     return hi_d, lo_d
 
 
-_RR_BELOW = 0.05  # transmittance estimates below this play Russian roulette (pbrt-v4's rule)
+_RR_BELOW = 0.2  # transmittance estimates below this play Russian roulette (module docstring)
 _RR_END = 0.75  # ... and end with this probability
 
 
