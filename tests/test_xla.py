@@ -9,11 +9,12 @@ import pytest
 from radiometria import _xla
 from radiometria.render import _driver
 
+_M = np.array([[0.5, 0.1, 0.0], [0.0, 0.4, 0.2], [0.3, 0.0, 0.6]])
+
 
 def _small_products(p):
     """A path tracer's kind of work: (n, 3) points through a 3x3 matrix, summed over the axis."""
-    m = jnp.asarray([[0.5, 0.1, 0.0], [0.0, 0.4, 0.2], [0.3, 0.0, 0.6]], p.dtype)
-    return jnp.sum((p @ m.T) * p, axis=-1)
+    return jnp.sum((p @ jnp.asarray(_M, p.dtype).T) * p, axis=-1)
 
 
 @pytest.fixture
@@ -24,17 +25,16 @@ def clean_env(monkeypatch):
 
 def test_cpu_programs_compile_without_ynnpack_fusions(clean_env):
     """On the CPU the option is given and takes effect: the compiled program has no YNNPACK
-    custom call, while XLA's defaults (where they use YNNPACK) do; both compute the same."""
+    custom call, and computes what XLA's defaults and NumPy (float64) compute."""
     if not _xla.supported():
-        pytest.skip("this jaxlib does not know the option")
+        pytest.skip("this jaxlib does not know the option: the renderer uses XLA's defaults")
     assert _xla.compiler_options("cpu") == {_xla.YNN_OPTION: ""}
     p = np.random.default_rng(0).uniform(size=(256, 3)).astype(np.float32)
     tuned = jax.jit(_small_products, **_xla.jit_options("cpu"))
     assert "ynn_fusion" not in tuned.lower(p).compile().as_text()
     default = jax.jit(_small_products)
     np.testing.assert_allclose(tuned(p), default(p), rtol=1e-6)
-    expected = np.sum((p.astype(np.float64) @ np.asarray(
-        [[0.5, 0.1, 0.0], [0.0, 0.4, 0.2], [0.3, 0.0, 0.6]]).T) * p, axis=-1)  # fmt: skip
+    expected = np.sum((p.astype(np.float64) @ _M.T) * p, axis=-1)
     np.testing.assert_allclose(tuned(p), expected, rtol=1e-5)
 
 
