@@ -98,6 +98,7 @@ from ._scenes import (
     Material as Material,
     SceneDescription as SceneDescription,
     SceneError as SceneError,
+    SphereShape as SphereShape,
     compile_scene as compile_scene,
     load_mesh as load_mesh,
     load_mitsuba_xml as load_mitsuba_xml,

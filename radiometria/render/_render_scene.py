@@ -12,8 +12,14 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from ._accelerators import AbstractAccelerator, build_accelerator, check_triangle_arrays
+from ._accelerators import (
+    AbstractAccelerator,
+    SphereAccelerator,
+    build_accelerator,
+    check_triangle_arrays,
+)
 from ._geometry._mesh import _areas, _corners
+from ._geometry._sphere import MAX_ANALYTIC_SPHERES, Spheres
 from ._lights import AbstractLight, AreaLight, LightSet
 from ._materials import AbstractMaterial, Diffuse, MaterialSet
 from ._media import AbstractMediumPlugin, MediumSet
@@ -56,6 +62,13 @@ class RenderScene(eqx.Module):
         textures (blocks of `radiometria.render._textures._mesh_attribute.ATTRIBUTE_BLOCK`
         columns), or `None`. With them a hit's surface coordinates (the `uv` the textures
         get) are `(u, v, b1, b2, *face_attributes[face])`; without, `(u, v)`.
+    - `spheres`: the true spheres intersected analytically (`Spheres`; the accelerator is a
+        `SphereAccelerator`), or `None`. Their tessellations' triangles stay in the
+        per-triangle tables (material, media, emitter rows) but not in the accelerator.
+    - `face_sphere`: `(f,)` int32 index into `spheres` of the sphere each triangle
+        tessellates, -1 for the others; `None` without `spheres`. A hit on such a triangle
+        takes the sphere's point, normal (also the shading normal) and uv
+        (`surface_geometry`).
 
     !!! note "Thesis"
         Chapter 8 (the scene of the light transport equation).
@@ -80,6 +93,18 @@ class RenderScene(eqx.Module):
     face_uv: Float[Array, "f 3 2"] | None = None  # uv at each triangle's corners (textures)
     shading_normal: Float[Array, "f 3 3"] | None = None  # unit normals at the corners
     face_attributes: Float[Array, "f a"] | None = None  # mesh attributes (mesh_attribute)
+    spheres: Spheres | None = None  # spheres intersected analytically
+    face_sphere: Int[Array, " f"] | None = None  # sphere of each triangle, -1 none
+
+    def geometric_normal(self, face: Int[Array, " n"], p: Float[Array, "n 3"]):
+        """The unit geometric normal `(n, 3)` of the surface of `face` at the points `p`:
+        the triangle's, or for a triangle of an analytic sphere the sphere's at `p`."""
+        n = self.normal[face]
+        if self.spheres is None:
+            return n
+        s = self.face_sphere[face]
+        n_s = self.spheres.normal(jnp.maximum(s, 0), p).astype(n.dtype)
+        return jnp.where((s >= 0)[:, None], n_s, n)
 
     @property
     def surface_width(self) -> int:
@@ -110,6 +135,7 @@ class RenderScene(eqx.Module):
         face_uv=None,
         shading_normal=None,
         face_attributes=None,
+        spheres=None,
     ) -> "RenderScene":
         """Lay out a triangle scene (NumPy work, done once, outside `jit`).
 
@@ -151,6 +177,11 @@ class RenderScene(eqx.Module):
             geometric normals shade. Rows equal to the face's normal shade flat.
         - `face_attributes`: `(f, a)` baked mesh attributes of `mesh_attribute` textures
             (`compile_scene` makes them), or `None`.
+        - `spheres`: true spheres to intersect analytically, a sequence of `(center (3,),
+            radius, rotation (3, 3), triangles (m,))`: the sphere, the rotation from its
+            object frame (uv, `Spheres`) to the scene's axes, and the indices of the triangles
+            that tessellate it (they keep its table rows and leave the accelerator). At most
+            `MAX_ANALYTIC_SPHERES`; `accelerator` must then be a name. Default none.
         """
         vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
@@ -191,6 +222,18 @@ class RenderScene(eqx.Module):
             light = LightSet.from_lights(
                 [light, *lights], scene_radius=radius, scene_center=center, dtype=dtype
             )
+        sphere_fields = {}
+        if spheres:
+            sphere_fields = _sphere_fields(spheres, n_faces, dtype)
+            if isinstance(accelerator, AbstractAccelerator):
+                raise ValueError(
+                    "`accelerator` must be a name when `spheres` are given: the spheres' "
+                    "triangles are left out of the accelerator built here."
+                )
+            accelerator = SphereAccelerator.from_triangles(
+                vertices, faces, dtype=dtype, spheres=sphere_fields["spheres"],
+                sphere_faces=np.asarray(sphere_fields["face_sphere"]) >= 0, kind=accelerator,
+            )  # fmt: skip
         if not isinstance(accelerator, AbstractAccelerator):
             accelerator = build_accelerator(vertices, faces, kind=accelerator, dtype=dtype)
         media_fields = _media_fields(media, face_interior, face_exterior, camera_medium, n_faces)
@@ -216,7 +259,39 @@ class RenderScene(eqx.Module):
             shading_normal=shading_normal,
             face_attributes=face_attributes,
             **media_fields,
+            **sphere_fields,
         )
+
+
+def _sphere_fields(spheres, n_faces: int, dtype) -> dict:
+    """`spheres` and `face_sphere` of `RenderScene.from_triangles`, checked (NumPy)."""
+    spheres = list(spheres)
+    if len(spheres) > MAX_ANALYTIC_SPHERES:
+        raise ValueError(
+            f"`spheres` holds {len(spheres)} spheres; at most {MAX_ANALYTIC_SPHERES} are "
+            "intersected analytically (leave the others tessellated)."
+        )
+    face_sphere = np.full(n_faces, -1, np.int32)
+    first = []
+    for j, sp in enumerate(spheres):
+        if len(sp) != 4:
+            raise ValueError(
+                f"`spheres[{j}]` must be (center, radius, rotation, triangles), got {len(sp)} "
+                "items."
+            )
+        tri = np.asarray(sp[3], np.int64).reshape(-1)
+        if not len(tri) or tri.min() < 0 or tri.max() >= n_faces or np.any(face_sphere[tri] >= 0):
+            raise ValueError(
+                f"`spheres[{j}]`: its triangles must be distinct indices of the {n_faces} "
+                "triangles, not shared with another sphere."
+            )
+        face_sphere[tri] = j
+        first.append(tri[0])
+    sph = Spheres.from_arrays(
+        [s[0] for s in spheres], [s[1] for s in spheres], [s[2] for s in spheres], first,
+        dtype=dtype,
+    )  # fmt: skip
+    return {"spheres": sph, "face_sphere": jnp.asarray(face_sphere)}
 
 
 def _optional_face_array(value, name: str, shape: tuple[int, ...], dtype):

@@ -49,9 +49,10 @@ def _box(lo, hi, inward=False):
     return v, (f if inward else f[:, ::-1])
 
 
-def _scene(parts, media, camera_medium=-1, radiance=1.0):
+def _scene(parts, media, camera_medium=-1, radiance=1.0, spheres=None):
     """`parts`: (vertices, faces, material, emits, interior, exterior); materials 0 = black
-    diffuse, 1 = null; one emitter of constant `radiance`."""
+    diffuse, 1 = null; one emitter of constant `radiance`; `spheres` as in
+    `RenderScene.from_triangles`."""
     verts, faces, mat, emi, inside, outside = [], [], [], [], [], []
     off = 0
     for v, f, m, e, i, o in parts:
@@ -75,6 +76,7 @@ def _scene(parts, media, camera_medium=-1, radiance=1.0):
         face_interior=np.asarray(inside),
         face_exterior=np.asarray(outside),
         camera_medium=camera_medium,
+        spheres=spheres,
     )
 
 

@@ -1,7 +1,8 @@
 """Accelerators: the scene geometry as ray-casting structures, one per file (thesis ch. 8).
 
 `AbstractAccelerator` (`_base.py`) is what the integrators query; `BVHAccelerator` (`_bvh.py`)
-and `BruteForceAccelerator` (`_brute_force.py`) implement it. `ACCELERATORS` lists them by
+and `BruteForceAccelerator` (`_brute_force.py`) implement it; `SphereAccelerator`
+(`_spheres.py`) wraps one of them together with analytic spheres. `ACCELERATORS` lists them by
 name, and `build_accelerator` builds the one a scene asks for (or the best for its size).
 A new accelerator is one file with a subclass and one line in `ACCELERATORS`.
 """
@@ -17,6 +18,7 @@ from ..._checks import check_choice
 from ._base import AbstractAccelerator as AbstractAccelerator
 from ._brute_force import BruteForceAccelerator as BruteForceAccelerator
 from ._bvh import BVHAccelerator as BVHAccelerator
+from ._spheres import SphereAccelerator as SphereAccelerator
 
 BRUTE_FORCE_MAX_TRIANGLES = 64
 """`build_accelerator(kind="auto")` uses brute force up to this many triangles, else a BVH."""

@@ -153,13 +153,38 @@ def _vertex(scene: RenderScene, origins, directions, tmax=None) -> _Vertex:
         ns = (1.0 - b1 - b2) * c[:, 0] + b1 * c[:, 1] + b2 * c[:, 2]
         length = jnp.sqrt(dot(ns, ns))[:, None]
         ns = jnp.where(length > 0, ns / jnp.where(length > 0, length, 1.0), n)
+    if scene.spheres is not None:  # hits on analytic spheres: the true sphere's geometry
+        s = scene.face_sphere[face]
+        on_sphere = (valid & (s >= 0))[:, None]
+        t_s = jnp.where(on_sphere[:, 0], t, 0.0).astype(origins.dtype)[:, None]
+        p_s, n_s, uv_s = scene.spheres.surface(jnp.maximum(s, 0), origins + t_s * directions)
+        p = jnp.where(on_sphere, p_s.astype(p.dtype), p)
+        n = jnp.where(on_sphere, n_s.astype(n.dtype), n)
+        ns = jnp.where(on_sphere, n_s.astype(ns.dtype), ns)
+        uv = uv.at[:, :2].set(jnp.where(on_sphere, uv_s.astype(uv.dtype), uv[:, :2]))
     return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions), uv=uv, ns=ns)
 
 
 def surface_tangents(scene: RenderScene, face, normal) -> tuple[Array, Array]:
     """dp/du and dp/dv of the hit triangles `(n, 3)` [scene units per uv unit], as Mitsuba's
     meshes: from the corners' uv (`RenderScene.face_uv`), or the edges when the mesh has no
-    uv (uv = barycentrics); a triangle with degenerate uv gets a frame around `normal`."""
+    uv (uv = barycentrics); a triangle with degenerate uv gets a frame around `normal`. On an
+    analytic sphere (`RenderScene.spheres`), the sphere's, where its geometric normal is
+    `normal`."""
+    dpdu, dpdv = _triangle_tangents(scene, face, normal)
+    if scene.spheres is None:
+        return dpdu, dpdv
+    s = scene.face_sphere[face]
+    du, dv = scene.spheres.tangents(jnp.maximum(s, 0), normal)
+    on_sphere = (s >= 0)[:, None]
+    return (
+        jnp.where(on_sphere, du.astype(dpdu.dtype), dpdu),
+        jnp.where(on_sphere, dv.astype(dpdv.dtype), dpdv),
+    )
+
+
+def _triangle_tangents(scene: RenderScene, face, normal) -> tuple[Array, Array]:
+    """dp/du and dp/dv of triangles (`surface_tangents`)."""
     e1, e2 = scene.e1[face], scene.e2[face]
     if scene.face_uv is None:
         return e1, e2
@@ -428,7 +453,9 @@ def shading_frame(scene: RenderScene, v: _Vertex) -> ShadingFrame:
     reflector ends there (Mitsuba's one-sided BSDFs: `scatters` is False); dielectrics keep the
     normal, and wo below it means the ray is inside. Which side was hit, and where rays leave
     from, follow the geometric normal (no light leaks through a surface; Mitsuba and pbrt
-    alike). With normal or bump maps the tangent `s` follows dp/du (Mitsuba's frame).
+    alike). With normal or bump maps, and with anisotropic BSDFs
+    (`MaterialSet.tangent_frame`), the tangent `s` follows dp/du (Mitsuba's frame); else any
+    frame around the normal serves.
     """
     material = scene.face_material[v.face]
     two_sided = scene.materials.two_sided[material]
@@ -437,7 +464,7 @@ def shading_frame(scene: RenderScene, v: _Vertex) -> ShadingFrame:
     flip = (two_sided & ~front & ~transmissive)[:, None]
     n = jnp.where(flip, -v.ns, v.ns)
     scatters = front | two_sided | transmissive
-    if not scene.materials.needs_geometry:
+    if not (scene.materials.needs_geometry or scene.materials.tangent_frame):
         s, t = coordinate_system(n)
         return ShadingFrame(material, s, t, n, scatters, None)
     dpdu, dpdv = surface_tangents(scene, v.face, v.n)
@@ -445,6 +472,8 @@ def shading_frame(scene: RenderScene, v: _Vertex) -> ShadingFrame:
     s_len = jnp.sqrt(dot(s, s))[:, None]
     s = jnp.where(s_len > 1e-12, s / jnp.where(s_len > 1e-12, s_len, 1.0), coordinate_system(n)[0])
     t = jnp.cross(n, s)
+    if not scene.materials.needs_geometry:
+        return ShadingFrame(material, s, t, n, scatters, None)
     local = ShadingFrame(material, s, t, n, scatters, None).to_local
     ng = jnp.where(flip, -v.n, v.n)
     geometry = HitGeometry(local(dpdu), local(dpdv), local(ng))

@@ -135,13 +135,13 @@ def _hash_uniform(seed_u: Array, step, n: int) -> Array:
     return uint32_to_unit_float(words.reshape(bits.shape[0], -1)[:, :n], seed_u.dtype)
 
 
-def _crossed(scene: RenderScene, face, w, medium):
-    """The medium a ray of direction `w` is in after crossing (or leaving) triangle `face`:
-    its interior against the normal, its exterior along it; unchanged for a triangle that
-    is no medium boundary."""
+def _crossed(scene: RenderScene, face, n, w, medium):
+    """The medium a ray of direction `w` is in after crossing (or leaving) triangle `face`,
+    whose geometric normal is `n` there: its interior against the normal, its exterior along
+    it; unchanged for a triangle that is no medium boundary."""
     interior = scene.face_interior[face]
     exterior = scene.face_exterior[face]
-    into = jnp.where(dot(scene.normal[face], w) < 0, interior, exterior)
+    into = jnp.where(dot(n, w) < 0, interior, exterior)
     return jnp.where(interior == KEEP_MEDIUM, medium, into)
 
 
@@ -299,7 +299,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         gathered += jnp.where((escaped & show)[:, None], beta * le_esc * mis_esc[:, None], 0.0)
         medium = w.medium
         if scene.media is not None:
-            medium = jnp.where(null_hit, _crossed(scene, v.face, d, w.medium), w.medium)
+            medium = jnp.where(null_hit, _crossed(scene, v.face, v.n, d, w.medium), w.medium)
         if scene.media is None or spectral_mis != "path":
             ratios = w.mis
         offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(v.p), axis=-1))
@@ -348,9 +348,10 @@ def _shadow_transmittance(
         tr = jnp.where((valid & ~null_hit)[:, None], 0.0, tr)
         p = o + t_hit[:, None] * w
         offset = scene.ray_epsilon * (1.0 + jnp.max(jnp.abs(p), axis=-1))
-        o = jnp.where(null_hit[:, None], _offset(p, scene.normal[face], w, offset), o)
+        ng = scene.geometric_normal(face, p)
+        o = jnp.where(null_hit[:, None], _offset(p, ng, w, offset), o)
         if scene.media is not None:
-            med = jnp.where(null_hit, _crossed(scene, face, w, med), med)
+            med = jnp.where(null_hit, _crossed(scene, face, ng, w, med), med)
         remaining = jnp.where(null_hit, remaining - t_hit - offset, remaining)
         return o, remaining, med, tr, null_hit & (remaining > 0)
 
@@ -368,7 +369,7 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     wo = -d
     in_medium = walk.event
     face = walk.face
-    ng = scene.normal[face]
+    ng = scene.geometric_normal(face, walk.p)
     material = scene.face_material[face]
     # The BSDF frame is the shading normal (as in `path_radiance`: Mitsuba's smoothed vertex
     # normals, also for meshes whose file has none); which side was hit, offsets and medium
@@ -414,7 +415,7 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
         shadow_tmax = jnp.where(use, jnp.minimum(shadow_tmax, 1e30), 0.0)
         start = walk.medium
         if media is not None:
-            start = jnp.where(in_medium, start, _crossed(scene, face, ls.wi, start))
+            start = jnp.where(in_medium, start, _crossed(scene, face, ng, ls.wi, start))
         tr = _shadow_transmittance(
             scene, origin, direction, shadow_tmax, start, wavelength_nm, seed_u,
             max_null=max_null, differentiable=differentiable,
@@ -441,7 +442,7 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
         pdf = jnp.where(in_medium, ps.pdf, pdf)
         specular = specular & ~in_medium
         transmission = transmission & ~in_medium
-        medium = jnp.where(in_medium, medium, _crossed(scene, face, wi, medium))
+        medium = jnp.where(in_medium, medium, _crossed(scene, face, ng, wi, medium))
     alive = alive & ok
     beta = jnp.where(alive[:, None], beta * weight, 0.0)
 

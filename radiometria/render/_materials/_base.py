@@ -12,6 +12,7 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import AbstractBxDF, BSDFSample
@@ -85,6 +86,13 @@ class AbstractMaterial(eqx.Module):
     def needs_geometry(self) -> bool:
         """Whether `bxdf` needs the hits' `HitGeometry` (static: from the plugin's kind)."""
         return self.USES_GEOMETRY
+
+    @property
+    def tangent_frame(self) -> bool:
+        """Whether some row's BxDF is anisotropic (its lobe turns about the normal), so that
+        the shading frame's tangent must follow dp/du, as Mitsuba's does. Read from the
+        concrete parameters when a `MaterialSet` is built (outside `jit`); False here."""
+        return False
 
     @property
     def transmissive_rows(self) -> Bool[Array, " m"]:
@@ -161,3 +169,25 @@ class ScaledBxDF(AbstractBxDF):
         s = self.base.sample_f(wo, u_lobe, u2, mode=mode)
         scale = jnp.where(s.is_transmission[..., None], self.transmission, self.reflection)
         return eqx.tree_at(lambda x: x.f, s, s.f * scale)
+
+
+def parameters_differ(a, b) -> bool:
+    """Whether two parameter pytrees (textures) differ in structure or in any concrete value;
+    True when they are not concrete (traced), so that the caller keeps the general path."""
+    if jax.tree.structure(a) != jax.tree.structure(b):
+        return True
+    try:
+        return any(
+            np.shape(x) != np.shape(y) or not np.array_equal(np.asarray(x), np.asarray(y))
+            for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True)
+        )
+    except (TypeError, jax.errors.TracerArrayConversionError):
+        return True
+
+
+def parameter_nonzero(a) -> bool:
+    """Whether a parameter pytree (a texture) holds any nonzero value (True when traced)."""
+    try:
+        return any(np.any(np.asarray(x) != 0) for x in jax.tree.leaves(a))
+    except (TypeError, jax.errors.TracerArrayConversionError):
+        return True

@@ -170,6 +170,10 @@ class BlendBSDF(AbstractMaterial):
     def needs_geometry(self) -> bool:
         return self.children.needs_geometry
 
+    @property
+    def tangent_frame(self) -> bool:
+        return self.children.tangent_frame
+
     def bxdf(
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None, geometry=None
     ):
@@ -242,6 +246,10 @@ class Mask(AbstractMaterial):
     @property
     def needs_geometry(self) -> bool:
         return self.children.needs_geometry
+
+    @property
+    def tangent_frame(self) -> bool:
+        return self.children.tangent_frame
 
     def bxdf(
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None, geometry=None

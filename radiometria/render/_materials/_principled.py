@@ -12,7 +12,7 @@ from ...colorimetry import get_cmfs
 from ...scattering import PrincipledBxDF, PrincipledThinBxDF, principled_eta
 from ...upsampling import RGBAlbedoSpectrum
 from .._textures import AbstractTexture, ConstantTexture, texture_parameter
-from ._base import AbstractMaterial, Properties, scalar, unknown_parameters
+from ._base import AbstractMaterial, Properties, parameter_nonzero, scalar, unknown_parameters
 from ._composite import scalar_texture
 
 __all__ = ["Principled", "PrincipledThin"]
@@ -154,6 +154,11 @@ class Principled(AbstractMaterial):
     def transmissive_rows(self) -> Bool[Array, " m"]:
         return self.transmits
 
+    @property
+    def tangent_frame(self) -> bool:
+        """Rows with `anisotropic` > 0 turn with dp/du."""
+        return parameter_nonzero(self.anisotropic)
+
     def bxdf(
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None
     ) -> PrincipledBxDF:
@@ -258,6 +263,11 @@ class PrincipledThin(AbstractMaterial):
     @property
     def transmissive_rows(self) -> Bool[Array, " m"]:
         return self.transmits
+
+    @property
+    def tangent_frame(self) -> bool:
+        """Rows with `anisotropic` > 0 turn with dp/du."""
+        return parameter_nonzero(self.anisotropic)
 
     def bxdf(
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None

@@ -7,7 +7,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ...scattering import RoughDielectricBxDF
 from .._textures import AbstractTexture
-from ._base import AbstractMaterial, Properties, ScaledBxDF, unknown_parameters
+from ._base import AbstractMaterial, Properties, ScaledBxDF, parameters_differ, unknown_parameters
 from ._dielectric import dielectric_textures
 from ._rough_conductor import distribution, roughness
 
@@ -56,6 +56,11 @@ class RoughDielectric(AbstractMaterial):
             *roughness(params, where),
             jnp.asarray([two_sided], bool),
         )
+
+    @property
+    def tangent_frame(self) -> bool:
+        """Anisotropic rows (`alpha_u` differs from `alpha_v`) turn with dp/du."""
+        return parameters_differ(self.alpha_u, self.alpha_v)
 
     def bxdf(
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None

@@ -24,6 +24,9 @@ class MaterialSet(eqx.Module):
     - `plugin_of`, `row_of`: `(m,)` int32, the plugin and the row of each material.
     - `two_sided`: `(m,)` bool, materials that scatter on both sides.
     - `transmissive`: `(m,)` bool, materials that transmit (both sides bound a medium).
+    - `identity_rows`: static, one plugin whose rows are the materials in order.
+    - `tangent_frame`: static, some material is anisotropic (`AbstractMaterial.tangent_frame`):
+        the shading frames then follow dp/du.
 
     At a hit, `bxdf(material, wavelength_nm, uv)` is the plugin's own BxDF when the scene has one
     kind; otherwise a mixture whose queries evaluate each kind on the paths that use it (in
@@ -39,6 +42,7 @@ class MaterialSet(eqx.Module):
     two_sided: Bool[Array, " m"]
     transmissive: Bool[Array, " m"]
     identity_rows: bool = eqx.field(static=True)
+    tangent_frame: bool = eqx.field(static=True, default=False)
 
     @classmethod
     def from_materials(cls, materials: "list[AbstractMaterial]") -> "MaterialSet":
@@ -69,6 +73,7 @@ class MaterialSet(eqx.Module):
             two_sided=two_sided,
             transmissive=jnp.asarray(transmissive, bool),
             identity_rows=len(plugins) == 1 and bool(np.all(np.diff(row_of) == 1)),
+            tangent_frame=any(p.tangent_frame for p in plugins),
         )
 
     @classmethod
@@ -95,8 +100,9 @@ class MaterialSet(eqx.Module):
                 kind = type(s.plugins[int(j)])
                 plugin_of.append(kinds.index(kind))
                 row_of.append(int(r) + shift[kind])
+        plugins = tuple(concatenate(groups[k]) for k in kinds)
         return cls(
-            plugins=tuple(concatenate(groups[k]) for k in kinds),
+            plugins=plugins,
             plugin_of=jnp.asarray(plugin_of, jnp.int32),
             row_of=jnp.asarray(row_of, jnp.int32),
             two_sided=jnp.concatenate([s.two_sided for s in sets]),
@@ -104,6 +110,7 @@ class MaterialSet(eqx.Module):
             identity_rows=len(kinds) == 1
             and row_of[:1] == [0]
             and bool(np.all(np.diff(row_of) == 1)),
+            tangent_frame=any(p.tangent_frame for p in plugins),
         ), offsets
 
     @property

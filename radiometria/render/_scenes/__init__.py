@@ -16,6 +16,7 @@ from ._description import (
     Material as Material,
     SceneDescription as SceneDescription,
     SceneError as SceneError,
+    SphereShape as SphereShape,
 )
 from ._load import BUILTIN_SCENES as BUILTIN_SCENES, load_scene as load_scene
 from ._mesh_files import load_mesh as load_mesh

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..._io import hash_array
 from ...camera import AbstractCamera, AbstractFilter, OrthographicCamera, ThinLensCamera
+from .._geometry._sphere import MAX_ANALYTIC_SPHERES
 from .._integrators import AbstractIntegrator
 from .._integrators._base import DEFAULT_UNBOUNDED_DEPTH
 from .._lights import AreaLight
@@ -217,7 +218,12 @@ def clear_compiled_scenes() -> None:
 
 
 def compile_scene(
-    description: SceneDescription, *, width=None, height=None, accelerator="auto"
+    description: SceneDescription,
+    *,
+    width=None,
+    height=None,
+    accelerator="auto",
+    analytic_spheres: bool = True,
 ) -> tuple[RenderScene, AbstractCamera, AbstractFilter]:
     """Turn a loaded scene (`load_scene`) into `(RenderScene, camera, filter)`.
 
@@ -233,6 +239,11 @@ def compile_scene(
     - `description`: a `SceneDescription`.
     - `width`, `height`: image size [px]; default: the scene's film.
     - `accelerator`: as in `RenderScene.from_triangles`.
+    - `analytic_spheres`: intersect the true spheres of the scene's `sphere` shapes
+        (`SceneDescription.spheres`) rather than their tessellations, as Mitsuba 3 does
+        (default). Emitting spheres stay tessellated (their lights are sampled by the cone
+        of the true sphere, `AreaLight`), and so do all spheres of a scene with more than
+        `MAX_ANALYTIC_SPHERES` (32) of them.
 
     **Returns:**
 
@@ -273,8 +284,21 @@ def compile_scene(
         face_uv=face_uvs(description),
         face_attributes=face_attributes,
         **_surface_attributes(description),
+        spheres=_analytic_spheres(description) if analytic_spheres else None,
     )
     return scene, scene_camera(description, width, height), scene_filter(description)
+
+
+def _analytic_spheres(description: SceneDescription) -> list | None:
+    """The `RenderScene.from_triangles` `spheres` of a scene: its non-emitting true spheres,
+    or `None` when it has none or more than `MAX_ANALYTIC_SPHERES`."""
+    emitter = np.asarray(description.face_emitter)
+    spheres = [
+        (s.center, s.radius, s.rotation, s.triangles)
+        for s in description.spheres
+        if np.all(emitter[s.triangles] < 0)
+    ]
+    return spheres if 0 < len(spheres) <= MAX_ANALYTIC_SPHERES else None
 
 
 def scene_sampler(

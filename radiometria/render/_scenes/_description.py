@@ -151,6 +151,31 @@ class AreaEmitter:
 
 
 @dataclasses.dataclass(frozen=True)
+class SphereShape:
+    """A `sphere` shape whose triangles tessellate a true sphere (thesis ch. 8): the renderer
+    intersects the sphere itself (`radiometria.render.compile_scene`).
+
+    **Fields:**
+
+    - `center`: `(3,)` centre. [scene length unit]
+    - `radius`: radius. [scene length unit]
+    - `rotation`: `(3, 3)` rotation from the sphere's object frame (the axes of its uv:
+        `u = phi / 2 pi` from +x towards +y, `v = theta / pi` from +z) to the scene's axes.
+    - `triangles`: `(k,)` int32 indices into `SceneDescription.faces` of its tessellation.
+    - `name`: the shape's name.
+
+    !!! note "Thesis"
+        Ch. 8 (shapes); Mitsuba 3's `sphere` (`Jakob2022`).
+    """
+
+    center: np.ndarray
+    radius: float
+    rotation: np.ndarray
+    triangles: np.ndarray
+    name: str = ""
+
+
+@dataclasses.dataclass(frozen=True)
 class LightDescription:
     """A light that is not on a shape: `point`, `spot`, `directional`, `constant`, `envmap`
     (thesis ch. 8).
@@ -300,6 +325,8 @@ class SceneDescription:
     - `mesh_attributes`: Mitsuba's mesh attributes of the shapes, by name
         (`"vertex_<name>"`: `(v, d)` per vertex, `"face_<name>"`: `(f, d)` per triangle), NaN
         rows for the shapes without that attribute (`mesh_attribute` textures read them).
+    - `spheres`: tuple of `SphereShape`, the shapes whose triangles tessellate a true sphere
+        (Mitsuba's `sphere` under a similarity without a mirror, normals outward).
 
     !!! note "Thesis"
         Ch. 8 (scene description for light transport); file formats of Mitsuba 3
@@ -333,6 +360,7 @@ class SceneDescription:
     vertex_normals: np.ndarray | None = None
     vertex_uvs: np.ndarray | None = None
     mesh_attributes: dict = dataclasses.field(default_factory=dict)
+    spheres: tuple = ()
 
     def __post_init__(self):
         f = np.asarray(self.faces)
@@ -391,7 +419,7 @@ class ShapeDescription:
     uvs: np.ndarray | None = None  # (v, 2) texture coordinates, or None
     # Mitsuba's mesh attributes: "vertex_<name>" (v, d) and "face_<name>" (f, d) arrays
     attributes: dict = dataclasses.field(default_factory=dict)
-    sphere: tuple | None = None  # a tessellated sphere's true (center, radius) (`ShapeMesh`)
+    sphere: tuple | None = None  # a tessellated sphere's (center, radius, rotation), `ShapeMesh`
 
 
 def assemble(
@@ -411,7 +439,7 @@ def assemble(
     camera_medium: int = -1,
 ) -> SceneDescription:
     """Validate the shapes (degenerate rule), merge them and build the emitters."""
-    all_v, all_f, mat, emi, owner, emitters = [], [], [], [], [], []
+    all_v, all_f, mat, emi, owner, emitters, spheres = [], [], [], [], [], [], []
     sides: list[np.ndarray] = []
     normals: list[np.ndarray] = []
     uvs: list[np.ndarray] = []
@@ -465,11 +493,17 @@ def assemble(
                     total_area=float(areas.sum()),
                     two_sided=bool(sh.emitter.get("two_sided", False)),
                     name=sh.name,
-                    sphere=sh.sphere,
+                    sphere=None if sh.sphere is None else tuple(sh.sphere[:2]),
                 )
             )
         else:
             emi.append(np.full(len(f), -1, np.int32))
+        if sh.sphere is not None and len(f):
+            c, r, rot = sh.sphere
+            spheres.append(SphereShape(
+                np.asarray(c, np.float64), float(r), np.asarray(rot, np.float64),
+                np.arange(n_faces, n_faces + len(f), dtype=np.int32), sh.name,
+            ))  # fmt: skip
         offset += len(v)
         n_faces += len(f)
     cat = lambda xs, shape, dt: np.concatenate(xs).astype(dt) if xs else np.zeros(shape, dt)
@@ -498,6 +532,7 @@ def assemble(
         vertex_normals=_attribute(normals, [s.normals for s in shapes], 3),
         vertex_uvs=_attribute(uvs, [s.uvs for s in shapes], 2),
         mesh_attributes=_mesh_attributes(attrs, offset, n_faces),
+        spheres=tuple(spheres),
     )
 
 

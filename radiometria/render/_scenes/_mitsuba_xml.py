@@ -806,14 +806,15 @@ def _shape_list(
     name = node.attrib.get("id", f"instance@{node.line}")
     out = []
     for sh in groups[gid]:
-        mesh = ShapeMesh(sh.vertices, sh.faces, sh.normals, sh.uvs, sh.attributes)
+        mesh = ShapeMesh(sh.vertices, sh.faces, sh.normals, sh.uvs, sh.attributes, sh.sphere)
         try:
             mesh = _shapes.transform_mesh(mesh, m, dims=1)
         except ValueError as e:
             raise ctx.err(node, f"parameter 'to_world': {e}") from None
         out.append(dataclasses.replace(
             sh, name=f"{name}/{sh.name}", vertices=mesh.vertices, faces=mesh.faces,
-            normals=mesh.normals, where=f"{node.file or ctx.file}:{node.line}: instance "
+            normals=mesh.normals, sphere=mesh.sphere,
+            where=f"{node.file or ctx.file}:{node.line}: instance "
             f"'{name}' of '{gid}'",
         ))  # fmt: skip
     return out

@@ -69,9 +69,11 @@ class ShapeMesh:
     - `attributes`: Mitsuba's mesh attributes: `vertex_<name>` `(v, d)` and `face_<name>`
         `(f, d)` arrays (e.g. `vertex_color`), read by `mesh_attribute` textures.
     - `sphere`: for a tessellated `sphere` with outward normals, the true sphere's
-        `(center (3,), radius)` [scene length unit], so that an emitter on it is sampled by
-        the cone it subtends (`AreaLight`); `None` for other meshes, and once a transform
-        that is not a similarity or `flip_normals` is applied.
+        `(center (3,), radius, rotation (3, 3))` [scene length unit], the rotation taking
+        its object frame (its uv's axes) to the scene's, so that the renderer intersects
+        it analytically and an emitter on it is sampled by the cone it subtends
+        (`AreaLight`); `None` for other meshes, and once a transform that is not a
+        similarity with positive determinant, or `flip_normals`, is applied.
     """
 
     vertices: np.ndarray
@@ -178,7 +180,9 @@ def sphere(
     keep = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
     f = f[keep > 1e-12]
     c = np.asarray(center, np.float64)
-    return ShapeMesh(v * radius + c, f, v.copy(), uv.reshape(-1, 2), sphere=(c, float(radius)))
+    return ShapeMesh(
+        v * radius + c, f, v.copy(), uv.reshape(-1, 2), sphere=(c, float(radius), np.eye(3))
+    )
 
 
 def _frame(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -265,8 +269,9 @@ def transform_mesh(
 
 
 def _transform_sphere(sphere, m: np.ndarray, flip_normals: bool):
-    """A sphere's `(center, radius)` under the affine `m`, if `m` keeps it a sphere (a
-    similarity: `L^T L = s^2 I`) with outward normals; else `None`."""
+    """A sphere's `(center, radius, rotation)` under the affine `m`, if `m` keeps it a sphere
+    with outward normals (a similarity, `L^T L = s^2 I`, without a mirror: `det L > 0`);
+    else `None`."""
     if sphere is None or flip_normals:
         return None
     lin = m[:3, :3]
@@ -274,4 +279,7 @@ def _transform_sphere(sphere, m: np.ndarray, flip_normals: bool):
     s2 = np.trace(gram) / 3.0
     if not s2 > 0 or np.max(np.abs(gram - s2 * np.eye(3))) > 1e-9 * s2:
         return None
-    return lin @ sphere[0] + m[:3, 3], float(np.sqrt(s2) * sphere[1])
+    if np.linalg.det(lin) <= 0:
+        return None
+    s = np.sqrt(s2)
+    return lin @ sphere[0] + m[:3, 3], float(s * sphere[1]), (lin / s) @ sphere[2]
