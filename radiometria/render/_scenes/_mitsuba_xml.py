@@ -16,7 +16,8 @@ and rejects everything else with an error that names the file, the line and the 
   `_mesh_files._ply_attributes`), `serialized` (`filename`, `shape_index`; vertex colours
   become the attribute `vertex_color`), `rectangle`, `disk`, `cube`, `cylinder`
   (`radius`, `p0`, `p1`), `sphere` (`center`, `radius`), tessellated with Mitsuba's
-  parametrisation as described in `radiometria.render._scenes._shapes`; `to_world`,
+  parametrisation as described in `radiometria.render._scenes._shapes` (a sphere that does
+  not emit is then intersected exactly: `compile_scene`); `to_world`,
   `flip_normals` on all, `face_normals` on meshes, cylinders and spheres (without it, a mesh
   without vertex normals gets Mitsuba's angle-weighted ones); one `bsdf` (inline or `ref`)
   and one `area` emitter. `shapegroup` (with an `id`, at the top level, shapes without

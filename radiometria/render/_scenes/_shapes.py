@@ -1,8 +1,9 @@
 """Mitsuba 3's analytic shapes as triangle meshes, and the mesh operations of its shapes
 (thesis ch. 8).
 
-The renderer intersects triangles only, so `rectangle`, `disk`, `cube`, `cylinder` and
-`sphere` become meshes here, in Mitsuba 3's object space and with its parametrisation, so
+The scene description holds triangles, so `rectangle`, `disk`, `cube`, `cylinder` and
+`sphere` become meshes here (a sphere also keeps its true sphere, which the renderer
+intersects instead: `ShapeMesh.sphere`), in Mitsuba 3's object space and with its parametrisation, so
 that a texture lookup or a shading normal finds the same values as on Mitsuba's shape:
 
 - `rectangle`: [-1, 1]^2 at z = 0, normal +z, uv = ((x + 1) / 2, (y + 1) / 2); 2 triangles,
