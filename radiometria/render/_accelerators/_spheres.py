@@ -15,6 +15,7 @@ from jaxtyping import Array, Int
 from .._geometry._sphere import Spheres
 from .._geometry._triangle import Hit
 from ._base import AbstractAccelerator
+from ._build import build_accelerator
 
 __all__ = ["SphereAccelerator"]
 
@@ -66,8 +67,6 @@ class SphereAccelerator(AbstractAccelerator):
             out of the triangle accelerator).
         - `kind`: the triangle accelerator's kind (`build_accelerator`).
         """
-        from . import build_accelerator
-
         if spheres is None:
             raise TypeError("SphereAccelerator needs `spheres` (a Spheres).")
         faces = np.asarray(faces)
