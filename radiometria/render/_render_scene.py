@@ -280,7 +280,13 @@ def _sphere_fields(spheres, n_faces: int, dtype) -> dict:
                 "items."
             )
         tri = np.asarray(sp[3], np.int64).reshape(-1)
-        if not len(tri) or tri.min() < 0 or tri.max() >= n_faces or np.any(face_sphere[tri] >= 0):
+        if (
+            not len(tri)
+            or tri.min() < 0
+            or tri.max() >= n_faces
+            or len(np.unique(tri)) < len(tri)
+            or np.any(face_sphere[tri] >= 0)
+        ):
             raise ValueError(
                 f"`spheres[{j}]`: its triangles must be distinct indices of the {n_faces} "
                 "triangles, not shared with another sphere."

@@ -351,3 +351,42 @@ def test_anisotropic_roughness_turns_with_dpdu_as_in_mitsuba(tmp_path, shape):
 </scene>""")
     result = z_test_against_mitsuba(path, spp=64, ref_spp=2048)
     assert result.passed, result.message
+
+
+def test_which_spheres_are_intersected_analytically(tmp_path):
+    """Emitting spheres stay tessellated (their lights sample the true sphere's cone), as do
+    all spheres of a scene with more than `MAX_ANALYTIC_SPHERES`; bad sphere tables are
+    refused with the argument named."""
+    from radiometria.render._geometry._sphere import MAX_ANALYTIC_SPHERES
+
+    def scene_xml(n_plain, emitter=True):
+        plain = "".join(
+            f'<shape type="sphere"><point name="center" value="{3 * i}, 0, 0"/>'
+            '<float name="radius" value="0.5"/></shape>'
+            for i in range(n_plain)
+        )
+        lit = (
+            (
+                '<shape type="sphere"><point name="center" value="0, 5, 0"/><emitter type="area">'
+                '<rgb name="radiance" value="1"/></emitter></shape>'
+            )
+            if emitter
+            else ""
+        )
+        path = tmp_path / f"s{n_plain}.xml"
+        path.write_text(f'<scene version="3.0.0">{plain}{lit}</scene>')
+        return load_mitsuba_xml(path)
+
+    scene, _, _ = compile_scene(scene_xml(2))
+    assert isinstance(scene.accelerator, SphereAccelerator)
+    assert scene.spheres.center.shape == (2, 3)
+    lit = np.asarray(scene.face_sphere)[np.asarray(scene_xml(2).face_emitter) >= 0]
+    assert np.all(lit == -1)
+    many, _, _ = compile_scene(scene_xml(MAX_ANALYTIC_SPHERES + 1, emitter=False))
+    assert many.spheres is None and not isinstance(many.accelerator, SphereAccelerator)
+    with pytest.raises(ValueError, match=r"spheres\[0\].*distinct indices"):
+        m = sphere()
+        _scene([(m.vertices, m.faces, 0, False, -2, -2)], [_medium(1.0, 0.0)],
+               spheres=[((0, 0, 0), 1.0, np.eye(3), [0, 0])])  # fmt: skip
+    with pytest.raises(ValueError, match="radii must be positive"):
+        Spheres.from_arrays([[0, 0, 0]], [0.0], [np.eye(3)], [0])

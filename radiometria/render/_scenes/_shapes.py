@@ -3,8 +3,9 @@
 
 The scene description holds triangles, so `rectangle`, `disk`, `cube`, `cylinder` and
 `sphere` become meshes here (a sphere also keeps its true sphere, which the renderer
-intersects instead: `ShapeMesh.sphere`), in Mitsuba 3's object space and with its parametrisation, so
-that a texture lookup or a shading normal finds the same values as on Mitsuba's shape:
+intersects instead: `ShapeMesh.sphere`), in Mitsuba 3's object space and with its
+parametrisation, so that a texture lookup or a shading normal finds the same values as on
+Mitsuba's shape:
 
 - `rectangle`: [-1, 1]^2 at z = 0, normal +z, uv = ((x + 1) / 2, (y + 1) / 2); 2 triangles,
     exact.
