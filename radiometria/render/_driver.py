@@ -196,6 +196,13 @@ class _Config:
     spectral_bins: int = 0  # 0: an XYZ film only
 
 
+_ELEMENTWISE_PASSES = 16
+"""Up to this many passes per step, a step's filter footprints are summed over the passes as
+one fused elementwise loop rather than a `dot_general`: measured on XLA:CPU for 16384 pixels x
+4 passes, 0.28 ms against 8.5 ms (4096 x 16: 0.49 against 4.5 ms); at 64 passes the dot is
+faster (1.6 against 2.5 ms)."""
+
+
 def _footprint_radius(cfg: _Config, rfilter) -> int:
     """Pixels a sample reaches on each side of its own: 0 for filter importance sampling;
     for splatting, every d with |d| < r + 1/2 (a sample lies inside its pixel)."""
@@ -286,7 +293,14 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis.
         to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
         f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
-        footprints = jnp.einsum("tkj,tki,tkc->tjic", f1[..., 1], f1[..., 0], values)
+        fy, fx = f1[..., 1], f1[..., 0]
+        if k <= _ELEMENTWISE_PASSES:  # one fused loop; XLA:CPU's dot is 10-30x slower here
+            footprints = jnp.sum(
+                fy[..., :, None, None] * fx[..., None, :, None] * values[..., None, None, :],
+                axis=1,
+            )
+        else:
+            footprints = jnp.einsum("tkj,tki,tkc->tjic", fy, fx, values)
     if not bidirectional:
         return footprints
     # Camera-ray and splat estimates share one normalisation: with splatting reconstruction
