@@ -161,7 +161,8 @@ def _vertex(scene: RenderScene, origins, directions, tmax=None) -> _Vertex:
         p = jnp.where(on_sphere, p_s.astype(p.dtype), p)
         n = jnp.where(on_sphere, n_s.astype(n.dtype), n)
         ns = jnp.where(on_sphere, n_s.astype(ns.dtype), ns)
-        uv = uv.at[:, :2].set(jnp.where(on_sphere, uv_s.astype(uv.dtype), uv[:, :2]))
+        uv_hit = jnp.where(on_sphere, uv_s.astype(uv.dtype), uv[:, :2])
+        uv = uv_hit if uv.shape[1] == 2 else jnp.concatenate([uv_hit, uv[:, 2:]], axis=-1)
     return _Vertex(valid=valid, p=p, n=n, face=face, t=t, cos_o=-dot(n, directions), uv=uv, ns=ns)
 
 
