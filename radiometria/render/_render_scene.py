@@ -180,8 +180,9 @@ class RenderScene(eqx.Module):
         - `spheres`: true spheres to intersect analytically, a sequence of `(center (3,),
             radius, rotation (3, 3), triangles (m,))`: the sphere, the rotation from its
             object frame (uv, `Spheres`) to the scene's axes, and the indices of the triangles
-            that tessellate it (they keep its table rows and leave the accelerator). At most
-            `MAX_ANALYTIC_SPHERES`; `accelerator` must then be a name. Default none.
+            that tessellate it (they keep its table rows and leave the accelerator; an
+            emitter on them samples the true sphere). At most `MAX_ANALYTIC_SPHERES`;
+            `accelerator` must then be a name. Default none.
         """
         vertices, faces = check_triangle_arrays(vertices, faces)
         if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
@@ -210,9 +211,14 @@ class RenderScene(eqx.Module):
         area = _areas(np, vertices, faces)
         normal = np.cross(e1, e2) / np.where(area > 0, 2.0 * area, 1.0)[:, None]
         p0, e1, e2, normal = (jnp.asarray(x, dtype=dtype) for x in (v0, e1, e2, normal))
+        sphere_fields, true_spheres = {}, None
+        if spheres:
+            sphere_fields = _sphere_fields(spheres, n_faces, dtype)
+            true_spheres = _emitter_true_spheres(spheres, face_emitter, n_em)
         light = AreaLight.from_triangles(
             p0, e1, e2, normal, area, face_emitter, radiance, emitter_two_sided,
-            face_uv=face_uv, emitter_sphere=emitter_sphere, dtype=dtype,
+            face_uv=face_uv, emitter_sphere=emitter_sphere, emitter_true_sphere=true_spheres,
+            dtype=dtype,
         )  # fmt: skip
         if lights:
             # The bounding sphere of the geometry sets the power of lights at infinity.
@@ -222,9 +228,7 @@ class RenderScene(eqx.Module):
             light = LightSet.from_lights(
                 [light, *lights], scene_radius=radius, scene_center=center, dtype=dtype
             )
-        sphere_fields = {}
         if spheres:
-            sphere_fields = _sphere_fields(spheres, n_faces, dtype)
             if isinstance(accelerator, AbstractAccelerator):
                 raise ValueError(
                     "`accelerator` must be a name when `spheres` are given: the spheres' "
@@ -261,6 +265,26 @@ class RenderScene(eqx.Module):
             **media_fields,
             **sphere_fields,
         )
+
+
+def _emitter_true_spheres(spheres, face_emitter: np.ndarray, n_em: int) -> list | None:
+    """Per emitter, the `(center, radius, rotation)` of the analytic sphere it covers, or
+    `None` (`AreaLight.from_triangles`' `emitter_true_sphere`); an analytic sphere must
+    emit from all its triangles as one emitter that emits nowhere else, or not at all."""
+    out: list = [None] * n_em
+    for j, (center, radius, rotation, tri) in enumerate(spheres):
+        tri = np.asarray(tri, np.int64).reshape(-1)
+        ids = np.unique(face_emitter[tri])
+        if ids.tolist() == [-1]:
+            continue
+        e = int(ids[0])
+        if len(ids) > 1 or np.count_nonzero(face_emitter == e) != len(tri):
+            raise ValueError(
+                f"`spheres[{j}]`: an analytic sphere's triangles must all belong to one "
+                f"emitter that has no other triangles, or to none; they belong to {ids.tolist()}."
+            )
+        out[e] = (center, radius, rotation)
+    return out if any(sp is not None for sp in out) else None
 
 
 def _sphere_fields(spheres, n_faces: int, dtype) -> dict:

@@ -354,9 +354,9 @@ def test_anisotropic_roughness_turns_with_dpdu_as_in_mitsuba(tmp_path, shape):
 
 
 def test_which_spheres_are_intersected_analytically(tmp_path):
-    """Emitting spheres stay tessellated (their lights sample the true sphere's cone), as do
-    all spheres of a scene with more than `MAX_ANALYTIC_SPHERES`; bad sphere tables are
-    refused with the argument named."""
+    """Emitting spheres are analytic too (their light samples lie on the true sphere, density
+    P_e / 4 pi r^2); all spheres of a scene with more than `MAX_ANALYTIC_SPHERES` stay
+    tessellated; bad sphere tables are refused with the argument named."""
     from radiometria.render._geometry._sphere import MAX_ANALYTIC_SPHERES
 
     def scene_xml(n_plain, emitter=True):
@@ -377,11 +377,14 @@ def test_which_spheres_are_intersected_analytically(tmp_path):
         path.write_text(f'<scene version="3.0.0">{plain}{lit}</scene>')
         return load_mitsuba_xml(path)
 
-    scene, _, _ = compile_scene(scene_xml(2))
+    d = scene_xml(2)
+    scene, _, _ = compile_scene(d)
     assert isinstance(scene.accelerator, SphereAccelerator)
-    assert scene.spheres.center.shape == (2, 3)
-    lit = np.asarray(scene.face_sphere)[np.asarray(scene_xml(2).face_emitter) >= 0]
-    assert np.all(lit == -1)
+    assert scene.spheres.center.shape == (3, 3)
+    lit = np.asarray(d.face_emitter) >= 0
+    assert np.all(np.asarray(scene.face_sphere)[lit] == 2)
+    pdf = np.asarray(scene.light.light_pdf_area)[lit]
+    np.testing.assert_allclose(pdf, 1.0 / (4.0 * np.pi), rtol=1e-6)  # the only light, r = 1
     many, _, _ = compile_scene(scene_xml(MAX_ANALYTIC_SPHERES + 1, emitter=False))
     assert many.spheres is None and not isinstance(many.accelerator, SphereAccelerator)
     with pytest.raises(ValueError, match=r"spheres\[0\].*distinct indices"):
@@ -390,3 +393,32 @@ def test_which_spheres_are_intersected_analytically(tmp_path):
                spheres=[((0, 0, 0), 1.0, np.eye(3), [0, 0])])  # fmt: skip
     with pytest.raises(ValueError, match="radii must be positive"):
         Spheres.from_arrays([[0, 0, 0]], [0.0], [np.eye(3)], [0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("ours", ["path", "bdpt"])
+def test_textured_sphere_light_passes_the_z_test_against_mitsuba(tmp_path, ours):
+    """A sphere light whose radiance is one colour on each half (phi < pi, phi > pi: a
+    checkerboard stretched over v) over a floor, rotated so that the floor sees both halves:
+    its light samples are points on the true sphere (by area: a textured light has no cone)
+    with the uv of the rotated frame, and bdpt's light paths start there, against Mitsuba's
+    analytic sphere light (the uv of an unrotated frame fails)."""
+    from radiometria.render import BDPT
+    from tests.render._mitsuba import perspective_xml, z_test_against_mitsuba
+
+    path = tmp_path / "sphere_light.xml"
+    path.write_text(f"""<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="3"/></integrator>
+  {perspective_xml("0, 1.2, 3.2", 55, 16)}
+  <shape type="rectangle"><transform name="to_world"><scale value="3"/>
+    <rotate x="1" angle="-90"/><translate y="-0.6"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.6"/></bsdf></shape>
+  <shape type="sphere"><float name="radius" value="0.4"/>
+    <transform name="to_world"><rotate x="1" angle="60"/><translate y="0.3"/></transform>
+    <emitter type="area"><texture type="checkerboard" name="radiance">
+      <rgb name="color0" value="0.95, 0.3, 0.1"/><rgb name="color1" value="0.1, 0.4, 0.95"/>
+      <transform name="to_uv"><scale x="1" y="0.5"/></transform></texture></emitter></shape>
+</scene>""")
+    kwargs = {"integrator": BDPT(max_depth=3)} if ours == "bdpt" else {}
+    res = z_test_against_mitsuba(path, spp=64, ref_spp=1024, **kwargs)
+    assert res.passed, res.message

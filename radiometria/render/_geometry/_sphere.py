@@ -22,7 +22,7 @@ from jaxtyping import Array, Bool, Float, Int
 
 from ..._math import dot
 
-__all__ = ["MAX_ANALYTIC_SPHERES", "Spheres"]
+__all__ = ["MAX_ANALYTIC_SPHERES", "Spheres", "sphere_uv"]
 
 MAX_ANALYTIC_SPHERES = 32
 """The most spheres a scene intersects analytically (each ray is tested against every one);
@@ -43,6 +43,17 @@ def _roots(f, d, radius):
     q_safe = jnp.where(q == 0, 1.0, q)
     t0, t1 = q / a, jnp.where(q == 0, q / a, c / q_safe)
     return jnp.minimum(t0, t1), jnp.maximum(t0, t1), disc >= 0
+
+
+def sphere_uv(to_local: Float[Array, "n 3 3"], normal: Float[Array, "n 3"]) -> Float[Array, "n 2"]:
+    """Mitsuba's uv `(phi / 2 pi, theta / pi)` of the points of spheres whose outward unit
+    normals are `normal`, each sphere's object frame given by `to_local` (module docstring).
+    [1]"""
+    q = jnp.einsum("nij,nj->ni", to_local, normal)
+    phi = jnp.arctan2(q[:, 1], q[:, 0])
+    phi = jnp.where(phi < 0, phi + 2.0 * jnp.pi, phi)
+    theta = jnp.arccos(jnp.clip(q[:, 2], -1.0, 1.0))
+    return jnp.stack([phi / (2.0 * jnp.pi), theta / jnp.pi], axis=-1)
 
 
 class Spheres(eqx.Module):
@@ -160,12 +171,7 @@ class Spheres(eqx.Module):
         """
         n = self.normal(index, p)
         point = self.center[index] + self.radius[index][:, None] * n
-        q = jnp.einsum("nij,nj->ni", self.to_local[index], n)
-        phi = jnp.arctan2(q[:, 1], q[:, 0])
-        phi = jnp.where(phi < 0, phi + 2.0 * jnp.pi, phi)
-        theta = jnp.arccos(jnp.clip(q[:, 2], -1.0, 1.0))
-        uv = jnp.stack([phi / (2.0 * jnp.pi), theta / jnp.pi], axis=-1)
-        return point, n, uv.astype(p.dtype)
+        return point, n, sphere_uv(self.to_local[index], n).astype(p.dtype)
 
     def tangents(self, index: Int[Array, " n"], normal: Float[Array, "n 3"]):
         """`(dp/du, dp/dv)` `(n, 3)` of sphere `index` where its outward normal is `normal`

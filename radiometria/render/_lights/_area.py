@@ -8,9 +8,15 @@ import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
 from ..._math import dot
-from ...montecarlo import sample_cosine_hemisphere, sample_uniform_cone, sample_uniform_triangle
+from ...montecarlo import (
+    sample_cosine_hemisphere,
+    sample_uniform_cone,
+    sample_uniform_sphere,
+    sample_uniform_triangle,
+)
 from ...scattering import coordinate_system
 from ...upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
+from .._geometry._sphere import sphere_uv
 from .._spectral import SpectrumTable, wavelength_grid_nm
 from .._textures import (
     AbstractTexture,
@@ -60,7 +66,10 @@ class AreaLight(AbstractLight):
     shadow ray to the true sphere never meets the light's own triangles; directions within
     that sliver of the silhouette that miss the mesh are counted by light samples only (a
     relative difference below 1e-3 of the sphere's rim, where Mitsuba's sphere is). From
-    inside the sphere, and for textured radiance, triangles are sampled by area.
+    inside the sphere, and for textured radiance, triangles are sampled by area; when the
+    scene intersects the sphere analytically (`emitter_true_sphere`), points are drawn
+    uniformly on the true sphere instead (density $P_e / 4\pi r^2$), as are the origins of
+    emitted rays (`sample_le`).
 
     Build it with `AreaLight.from_triangles` (NumPy work, once, outside `jit`).
 
@@ -112,6 +121,9 @@ class AreaLight(AbstractLight):
     sphere_center: Float[Array, "e 3"] | None = None
     sphere_radius: Float[Array, " e"] | None = None
     sphere_prob: Float[Array, " e"] | None = None
+    analytic_center: Float[Array, "e 3"] | None = None
+    analytic_radius: Float[Array, " e"] | None = None
+    analytic_to_local: Float[Array, "e 3 3"] | None = None
     phi: float = eqx.field(static=True, default=0.0)
 
     @classmethod
@@ -128,6 +140,7 @@ class AreaLight(AbstractLight):
         *,
         face_uv=None,
         emitter_sphere=None,
+        emitter_true_sphere=None,
         dtype=jnp.float32,
     ) -> "AreaLight":
         """Area lights on the triangles of a scene.
@@ -145,6 +158,11 @@ class AreaLight(AbstractLight):
             serve as uv); used when the radiance is a texture. [1]
         - `emitter_sphere`: per emitter, `(center (3,), radius)` of the sphere its triangles
             tessellate, or `None` (class docstring, "Spheres"). [scene units]
+        - `emitter_true_sphere`: per emitter, `(center (3,), radius, rotation (3, 3))` of the
+            sphere its triangles tessellate when the scene intersects that sphere
+            analytically (`RenderScene.spheres`), else `None` (default: none). Such an
+            emitter's points are drawn uniformly on the true sphere, density
+            P_e / (4 pi r^2) on every one of its triangles. [scene units]
         - `dtype`: float dtype of the arrays.
         """
         if isinstance(radiance, SpectrumTable):
@@ -180,6 +198,28 @@ class AreaLight(AbstractLight):
             light_cdf = np.cumsum(prob)
             light_cdf[-1] = 1.0
             pdf_area[emissive] = prob / area[emissive]
+        analytic = {}
+        if emitter_true_sphere is not None and any(sp is not None for sp in emitter_true_sphere):
+            if len(emitter_true_sphere) != n_em:
+                raise ValueError(
+                    f"`emitter_true_sphere` must have one entry per emitter ({n_em}), "
+                    f"got {len(emitter_true_sphere)}."
+                )
+            center, radius = np.zeros((n_em, 3)), np.zeros(n_em)
+            to_local = np.tile(np.eye(3), (n_em, 1, 1))
+            for e, sp in enumerate(emitter_true_sphere):
+                if sp is None:
+                    continue
+                center[e], radius[e] = np.asarray(sp[0], np.float64), float(sp[1])
+                to_local[e] = np.asarray(sp[2], np.float64).T
+                mine = face_emitter == e
+                p_e = pdf_area[mine] @ area[mine]  # the emitter's selection probability
+                pdf_area[mine] = p_e / (4.0 * np.pi * radius[e] ** 2)
+            analytic = {
+                "analytic_center": jnp.asarray(center, dtype),
+                "analytic_radius": jnp.asarray(radius, dtype),
+                "analytic_to_local": jnp.asarray(to_local, dtype),
+            }
         lf = jnp.asarray(light_face, jnp.int32)
         uv = {}
         if face_uv is not None and not isinstance(radiance, ConstantTexture):
@@ -222,6 +262,7 @@ class AreaLight(AbstractLight):
             phi=phi,
             **uv,
             **spheres,
+            **analytic,
         )
 
     @staticmethod
@@ -271,6 +312,25 @@ class AreaLight(AbstractLight):
         dc = jnp.sqrt(dc2)
         return cone, pdf, (to_c / dc[:, None], dc, r, omc)
 
+    def _point(self, j, e, u2, dtype):
+        """A point of light triangle `j` (of emitter `e`) drawn uniformly from `u2`, or, for an
+        emitter on an analytic sphere, uniformly on the true sphere: `(point, unit normal,
+        uv or None)`."""
+        bary = sample_uniform_triangle(u2, check=False).astype(dtype)
+        y = self.p0[j] + bary[:, 1:2] * self.e1[j] + bary[:, 2:3] * self.e2[j]
+        n_y = self.normal[j]
+        uv = self._uv(j, bary, dtype)
+        if self.analytic_radius is None:
+            return y, n_y, uv
+        r = self.analytic_radius[e]
+        on = (r > 0)[:, None]
+        w = sample_uniform_sphere(u2, check=False).astype(dtype)
+        y = jnp.where(on, self.analytic_center[e] + r[:, None] * w, y)
+        n_y = jnp.where(on, w, n_y)
+        if uv is not None:
+            uv = jnp.where(on, sphere_uv(self.analytic_to_local[e], w).astype(uv.dtype), uv)
+        return y, n_y, uv
+
     def _uv(self, j, bary, dtype):
         """uv of sampled points (barycentrics `bary` on light triangle `j`), or `None` for an
         untextured radiance."""
@@ -303,15 +363,13 @@ class AreaLight(AbstractLight):
         j = jnp.searchsorted(self.light_cdf, u_select, side="right", method=method)
         j = jnp.clip(j, 0, self.light_face.shape[0] - 1)
         lf = self.light_face[j]
-        bary = sample_uniform_triangle(u2, check=False).astype(dtype)
-        y = self.p0[j] + bary[:, 1:2] * self.e1[j] + bary[:, 2:3] * self.e2[j]
+        e = jnp.maximum(self.face_emitter[lf], 0)
+        y, n_y, uv = self._point(j, e, u2, dtype)
         to_light = y - p
         dist = jnp.sqrt(jnp.sum(to_light * to_light, axis=-1))
         wi = to_light / jnp.where(dist > 0, dist, 1.0)[:, None]
-        cos_light = -jnp.sum(self.normal[j] * wi, axis=-1)
+        cos_light = -jnp.sum(n_y * wi, axis=-1)
         pdf = self.pdf_li(lf, dist, cos_light)
-        uv = self._uv(j, bary, dtype)
-        e = jnp.maximum(self.face_emitter[lf], 0)
         le = self.radiance(e, wavelength_nm, uv)
         if self.sphere_radius is not None:  # a direction in the cone of a sphere (docstring)
             cone, pdf_cone, (axis, dc, r, omc) = self._cone(e, p)
@@ -336,20 +394,19 @@ class AreaLight(AbstractLight):
         j = jnp.searchsorted(self.light_cdf, u_select, side="right", method=method)
         j = jnp.clip(j, 0, self.light_face.shape[0] - 1)
         lf = self.light_face[j]
-        bary = sample_uniform_triangle(u_pos, check=False).astype(dtype)
-        p = self.p0[j] + bary[:, 1:2] * self.e1[j] + bary[:, 2:3] * self.e2[j]
         emitter = jnp.maximum(self.face_emitter[lf], 0)
+        p, n_p, uv = self._point(j, emitter, u_pos, dtype)
         two_sided = self.two_sided[emitter]
         flip = two_sided & (u_side >= 0.5)
-        n = jnp.where(flip[:, None], -self.normal[j], self.normal[j])
+        n = jnp.where(flip[:, None], -n_p, n_p)
         s, t = coordinate_system(n)
         local = sample_cosine_hemisphere(u_dir, check=False).astype(dtype)
         d = local[:, 0:1] * s + local[:, 1:2] * t + local[:, 2:3] * n
         d = d / jnp.sqrt(dot(d, d))[:, None]
         pdf_dir = local[:, 2] / jnp.pi * jnp.where(two_sided, 0.5, 1.0)
-        le = self.radiance(emitter, wavelength_nm, self._uv(j, bary, dtype))
+        le = self.radiance(emitter, wavelength_nm, uv)
         to_obs = observer - p
-        cos_obs = jnp.sum(self.normal[j] * to_obs, axis=-1)
+        cos_obs = jnp.sum(n_p * to_obs, axis=-1)
         facing = (cos_obs > 0) | (two_sided & (cos_obs != 0))
         return EmissionSample(
             p=p,

@@ -241,9 +241,9 @@ def compile_scene(
     - `accelerator`: as in `RenderScene.from_triangles`.
     - `analytic_spheres`: intersect the true spheres of the scene's `sphere` shapes
         (`SceneDescription.spheres`) rather than their tessellations, as Mitsuba 3 does
-        (default). Emitting spheres stay tessellated (their lights are sampled by the cone
-        of the true sphere, `AreaLight`), and so do all spheres of a scene with more than
-        `MAX_ANALYTIC_SPHERES` (32) of them.
+        (default); an emitting sphere's light samples then lie on the true sphere too
+        (`AreaLight`). A scene with more than `MAX_ANALYTIC_SPHERES` (32) spheres keeps
+        their tessellations.
 
     **Returns:**
 
@@ -290,14 +290,9 @@ def compile_scene(
 
 
 def _analytic_spheres(description: SceneDescription) -> list | None:
-    """The `RenderScene.from_triangles` `spheres` of a scene: its non-emitting true spheres,
-    or `None` when it has none or more than `MAX_ANALYTIC_SPHERES`."""
-    emitter = np.asarray(description.face_emitter)
-    spheres = [
-        (s.center, s.radius, s.rotation, s.triangles)
-        for s in description.spheres
-        if np.all(emitter[s.triangles] < 0)
-    ]
+    """The `RenderScene.from_triangles` `spheres` of a scene: its true spheres, or `None`
+    when it has none or more than `MAX_ANALYTIC_SPHERES`."""
+    spheres = [(s.center, s.radius, s.rotation, s.triangles) for s in description.spheres]
     return spheres if 0 < len(spheres) <= MAX_ANALYTIC_SPHERES else None
 
 
