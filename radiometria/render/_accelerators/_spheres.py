@@ -64,15 +64,14 @@ class SphereAccelerator(AbstractAccelerator):
         - `dtype`: floating dtype of the stored triangles.
         - `spheres`: the analytic `Spheres` (required).
         - `sphere_faces`: `(f,)` booleans, the triangles that tessellate those spheres (left
-            out of the triangle accelerator).
+            out of the triangle accelerator; required: without it the tessellations would
+            stand beside the spheres).
         - `kind`: the triangle accelerator's kind (`build_accelerator`).
         """
-        if spheres is None:
-            raise TypeError("SphereAccelerator needs `spheres` (a Spheres).")
+        if spheres is None or sphere_faces is None:
+            raise TypeError("SphereAccelerator needs `spheres` and `sphere_faces`.")
         faces = np.asarray(faces)
-        drop = (
-            np.zeros(len(faces), bool) if sphere_faces is None else np.asarray(sphere_faces, bool)
-        )
+        drop = np.asarray(sphere_faces, bool)
         if drop.shape != (len(faces),):
             raise ValueError(f"`sphere_faces` must have shape ({len(faces)},), got {drop.shape}.")
         keep = np.flatnonzero(~drop).astype(np.int32)

@@ -213,6 +213,7 @@ class _Walk(eqx.Module):
     mis: Array  # (n, k) spectral MIS ratios after the walk's free flights
     uv: Array  # (n, 2) surface coordinates of the surface hit (textures)
     ns: Array  # (n, 3) shading normal of the surface hit (`_vertex`), for the BSDF frame
+    n: Array  # (n, 3) geometric normal of the surface hit (`_vertex`)
 
 
 def _bounded_loop(body, init, n: int, differentiable: bool, pending):
@@ -258,6 +259,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
         mis=state.mis,
         uv=jnp.zeros((n, scene.surface_width), dtype),
         ns=jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3)),
+        n=jnp.broadcast_to(jnp.asarray([0.0, 0.0, 1.0], dtype), (n, 3)),
     )
     d = state.d
 
@@ -321,6 +323,7 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
             mis=ratios,
             uv=jnp.where(ended[:, None], v.uv, w.uv),
             ns=jnp.where(ended[:, None], v.ns, w.ns),
+            n=jnp.where(ended[:, None], v.n, w.n),
         )
 
     return _bounded_loop(body, walk, max_null, differentiable, lambda w: w.pending)
@@ -369,7 +372,7 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     wo = -d
     in_medium = walk.event
     face = walk.face
-    ng = scene.geometric_normal(face, walk.p)
+    ng = walk.n
     material = scene.face_material[face]
     # The BSDF frame is the shading normal (as in `path_radiance`: Mitsuba's smoothed vertex
     # normals, also for meshes whose file has none); which side was hit, offsets and medium
