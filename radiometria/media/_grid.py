@@ -53,11 +53,20 @@ added variance.
 **Variates.** The interface hands one variate per path (`u[:, 0]`, with `u[:, 1]` mixed in
 where given); the tracking steps draw theirs (the optical depth to the next collision, and
 the real-or-null or roulette decision) from the hash `pcg4d` of those variates and the
-step number (`Jarzynski2020`), so the same `u` gives the same result. The walks run in a
-`lax.while_loop` over tentative collisions, each with an inner `lax.while_loop` over the
-cells, until every path has left its segment: no step cap biases them.
+step number (`Jarzynski2020`), so the same `u` gives the same result.
+
+**Loop.** The walks run in one `lax.while_loop` until every path has left its segment (no step
+cap biases them). Each path crosses its cells on its own and waits at its tentative collisions;
+an iteration either moves every path that is not waiting by one cell (or to its collision in
+that cell) or, once half of the active paths wait (or all of them), evaluates their collisions
+together (a density lookup, dearer than a cell crossing). Nesting a loop over the cells inside
+a loop over the collisions, as before, made every path wait for the longest search of each
+collision. The results are identical; `bench_media.py`'s heterogeneous scene (128 x 128,
+16 spp, chunks of 256 paths, two CPU devices) took 1.09-1.13 s against 1.13-1.17 s, and
+1.21 s against 1.39 s with chunks of 1024 paths.
 """
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -222,6 +231,21 @@ def _check(x, name: str, **kw) -> Array:
     if isinstance(x, jax.core.Tracer):
         return x
     return check_coefficient(x, name, **kw)
+
+
+class _Track(eqx.Module):
+    """Where each path's walk through the majorant cells stands (`GridMedium._walk`)."""
+
+    t: Array  # (n,) distance along the ray [scene units]
+    cell: Array  # (n, 3) int32 majorant cell (x, y, z)
+    tau: Array  # (n,) optical depth left before the next tentative collision
+    v: Array  # (n,) the variate deciding that collision
+    step: Array  # (n,) uint32 tentative collisions so far (the hash's step number)
+    ctrl: Array  # (n,) the control density times length so far (ratio tracking)
+    active: Array  # (n,) bool: still walking
+    waiting: Array  # (n,) bool: at a tentative collision not yet evaluated
+    scattered: Array  # (n,) bool: a real collision (spectral tracking)
+    weight: Array  # (n, k)
 
 
 class GridMedium(AbstractMedium):
@@ -402,85 +426,115 @@ class GridMedium(AbstractMedium):
         def cell_value(g, cell):
             return g[cell[:, 2], cell[:, 1], cell[:, 0]]
 
-        def search(t, cell, tau, ctrl, todo):
-            """DDA: walk the cells until the optical depth `tau` of the tracking rate is used
-            up (a tentative collision at the returned `t`) or the segment ends (`found` False).
-            `ctrl` accumulates the control's density times length."""
-
-            def cond(c):
-                return jnp.any(c[4])
-
-            def body(c):
-                t, cell, tau, ctrl, todo, found = c
-                mu = cell_value(rate_g, cell) * s_max
-                dc = cell_value(ctrl_g, cell)
-                bound = (cell + fwd.astype(jnp.int32)).astype(dtype) / res
-                t_ax = jnp.where(w_l != 0, (bound - o_l) / safe_w, jnp.inf)
-                axis = jnp.argmin(t_ax, axis=-1)
-                seg_end = jnp.minimum(jnp.min(t_ax, axis=-1), stop)
-                seg = jnp.maximum(seg_end - t, 0.0)
-                hit = todo & (mu * seg > tau)
-                t_hit = t + tau / jnp.where(mu > 0, mu, 1.0)
-                cross = todo & ~hit
-                t_new = jnp.where(hit, t_hit, jnp.where(cross, seg_end, t))
-                ctrl = ctrl + jnp.where(todo, dc * (t_new - t), 0.0)
-                tau = jnp.where(cross, tau - mu * seg, tau)
-                on_axis = (jnp.arange(3)[None, :] == axis[:, None]) & cross[:, None]
-                cell_new = cell + jnp.where(on_axis, jnp.where(fwd, 1, -1), 0).astype(jnp.int32)
-                out = jnp.any((cell_new < 0) | (cell_new > top), axis=-1)
-                left = cross & ((seg_end >= stop) | out)
-                cell = jnp.where(left[:, None], cell, cell_new)
-                return t_new, cell, tau, ctrl, todo & ~hit & ~left, found | hit
-
-            init = (t, cell, tau, ctrl, todo, jnp.zeros_like(todo))
-            t, cell, _, ctrl, _, found = lax.while_loop(cond, body, init)
-            return t, cell, ctrl, found
+        def draw(step):
+            """Optical depth to the next tentative collision and the variate deciding it."""
+            v = _uniforms(u, step, 2)
+            return -jnp.log1p(-v[:, 0]), v[:, 1]
 
         def cond(c):
-            return jnp.any(c[3])
+            return jnp.any(c.active)
 
-        def body(c):
-            i, t, cell, active, scattered, weight, ctrl = c
-            v = _uniforms(u, i, 2)
-            tau = -jnp.log1p(-v[:, 0])
-            t, cell, ctrl, hit = search(t, cell, tau, ctrl, active)
-            mu = cell_value(rate_g, cell) * s_max
-            x = origins + jnp.where(hit, t, 0.0)[:, None] * directions
-            st, ss = self.coefficients_at(x, lam)
+        def advance(c: _Track) -> _Track:
+            """One DDA step (`Amanatides1987`) of every active path not waiting at a
+            collision: to its tentative collision if the optical depth `tau` left runs out in
+            its cell (it then waits there), else into the next cell."""
+            moving = c.active & ~c.waiting
+            mu = cell_value(rate_g, c.cell) * s_max
+            bound = (c.cell + fwd.astype(jnp.int32)).astype(dtype) / res
+            t_ax = jnp.where(w_l != 0, (bound - o_l) / safe_w, jnp.inf)
+            axis = jnp.argmin(t_ax, axis=-1)
+            seg_end = jnp.minimum(jnp.min(t_ax, axis=-1), stop)
+            seg = jnp.maximum(seg_end - c.t, 0.0)
+            hit = moving & (mu * seg > c.tau)
+            cross = moving & ~hit
+            t_new = jnp.where(
+                hit, c.t + c.tau / jnp.where(mu > 0, mu, 1.0), jnp.where(cross, seg_end, c.t)
+            )
+            ctrl = c.ctrl + jnp.where(moving, cell_value(ctrl_g, c.cell) * (t_new - c.t), 0.0)
+            on_axis = (jnp.arange(3)[None, :] == axis[:, None]) & cross[:, None]
+            cell_new = c.cell + jnp.where(on_axis, jnp.where(fwd, 1, -1), 0).astype(jnp.int32)
+            out = jnp.any((cell_new < 0) | (cell_new > top), axis=-1)
+            left = cross & ((seg_end >= stop) | out)
+            return eqx.tree_at(
+                lambda c: (c.t, c.cell, c.tau, c.ctrl, c.active, c.waiting),
+                c,
+                (
+                    t_new,
+                    jnp.where(left[:, None], c.cell, cell_new),
+                    jnp.where(cross, c.tau - mu * seg, c.tau),
+                    ctrl,
+                    c.active & ~left,
+                    c.waiting | hit,
+                ),
+            )
+
+        def collide(c: _Track) -> _Track:
+            """The tentative collisions of the waiting paths: the density where they are,
+            the estimator's weight, and the optical depth to the next one."""
+            hit = c.waiting
+            mu = cell_value(rate_g, c.cell) * s_max
             mu_s = jnp.where(mu > 0, mu, 1.0)
+            x = origins + jnp.where(hit, c.t, 0.0)[:, None] * directions
+            st, ss = self.coefficients_at(x, lam)
+            weight, scattered = c.weight, c.scattered
             if mode == "ratio":
-                sc = cell_value(ctrl_g, cell)[:, None] * s
+                sc = cell_value(ctrl_g, c.cell)[:, None] * s
                 factor = 1.0 - (st - sc) / mu_s[:, None]
                 weight = jnp.where(hit[:, None], weight * factor, weight)
                 # Russian roulette once the estimate falls below _RR_BELOW (module
                 # docstring): ended with probability _RR_END, else divided by 1 - _RR_END.
-                low = jnp.max(weight * jnp.exp(-s * ctrl[:, None]), axis=-1) < _RR_BELOW
+                low = jnp.max(weight * jnp.exp(-s * c.ctrl[:, None]), axis=-1) < _RR_BELOW
                 roulette = hit & low
-                ended = roulette & (v[:, 1] < _RR_END)
-                weight = jnp.where(ended[:, None], 0.0, weight)
-                weight = jnp.where((roulette & ~ended)[:, None], weight / (1.0 - _RR_END), weight)
-                new_active = hit & ~ended
+                stopped = roulette & (c.v < _RR_END)
+                weight = jnp.where(stopped[:, None], 0.0, weight)
+                weight = jnp.where((roulette & ~stopped)[:, None], weight / (1.0 - _RR_END), weight)
             else:
                 p_real = jnp.clip(jnp.mean(st, axis=-1) / mu_s, 0.0, 1.0)
-                real = hit & (v[:, 1] < p_real)
+                stopped = hit & (c.v < p_real)
                 w_real = safe_div(ss, (mu * p_real)[:, None])
                 w_null = safe_div(mu[:, None] - st, (mu * (1.0 - p_real))[:, None])
-                factor = jnp.where(real[:, None], w_real, w_null)
+                factor = jnp.where(stopped[:, None], w_real, w_null)
                 weight = jnp.where(hit[:, None], weight * factor, weight)
-                scattered = scattered | real
-                new_active = hit & ~real
-            return i + 1, t, cell, new_active, scattered, weight, ctrl
+                scattered = scattered | stopped
+            step = c.step + hit.astype(jnp.uint32)
+            tau_next, v_next = draw(step)
+            return eqx.tree_at(
+                lambda c: (c.tau, c.v, c.step, c.active, c.waiting, c.scattered, c.weight),
+                c,
+                (
+                    jnp.where(hit, tau_next, c.tau),
+                    jnp.where(hit, v_next, c.v),
+                    step,
+                    c.active & ~stopped,
+                    jnp.zeros_like(hit),
+                    scattered,
+                    weight,
+                ),
+            )
 
-        init = (
-            jnp.asarray(0, jnp.uint32),
-            jnp.where(active0, start, 0.0),
-            cell0,
-            active0,
-            jnp.zeros((n,), bool),
-            jnp.ones((n, k), dtype),
-            jnp.zeros((n,), dtype),
+        def body(c: _Track) -> _Track:
+            # Paths advance cell by cell independently and wait at their tentative collisions;
+            # the collisions are evaluated together (a density lookup is dear) once half of
+            # the active paths wait, or all of them.
+            n_waiting = jnp.sum(c.waiting, dtype=jnp.int32)
+            n_active = jnp.sum(c.active, dtype=jnp.int32)
+            return lax.cond(2 * n_waiting >= n_active, collide, advance, c)
+
+        tau0, v0 = draw(jnp.zeros((n,), jnp.uint32))
+        init = _Track(
+            t=jnp.where(active0, start, 0.0),
+            cell=cell0,
+            tau=tau0,
+            v=v0,
+            step=jnp.zeros((n,), jnp.uint32),
+            ctrl=jnp.zeros((n,), dtype),
+            active=active0,
+            waiting=jnp.zeros((n,), bool),
+            scattered=jnp.zeros((n,), bool),
+            weight=jnp.ones((n, k), dtype),
         )
-        _, t, _, _, scattered, weight, ctrl = lax.while_loop(cond, body, init)
+        out = lax.while_loop(cond, body, init)
+        t, scattered, weight, ctrl = out.t, out.scattered, out.weight, out.ctrl
         if mode == "ratio":
             weight = weight * jnp.exp(-s * ctrl[:, None])
         return t, scattered, weight, d
