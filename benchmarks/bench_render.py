@@ -13,7 +13,8 @@ Renderers: radiometria with the independent and the (padded Owen-scrambled) Sobo
 Mitsuba 3 `scalar_spectral`, and Mitsuba 3 `llvm_ad_spectral` when libLLVM is found
 (`apt-get install -y libllvm19`; set `DRJIT_LIBLLVM_PATH`). Every renderer uses all cores:
 XLA is given one CPU device per core (`--xla_force_host_platform_device_count`, set before JAX
-is imported) and radiometria shards the pixels over them; Mitsuba uses its thread pool.
+is imported, with the command line's other XLA flags: `radiometria.cli.cpu_xla_flags`) and
+radiometria shards the pixels over them; Mitsuba uses its thread pool.
 
     .venv/bin/python benchmarks/bench_render.py [--scene cornell|textured|envmap]
         [--size 256] [--ref-spp 1024] [--quick]
@@ -37,11 +38,13 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-if "jax" not in sys.modules:  # one XLA CPU device per core, so the render is sharded over them
-    os.environ.setdefault(
-        "XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}"
-    )
 sys.path.insert(0, str(ROOT))
+
+from radiometria.cli import cpu_xla_flags  # noqa: E402 (imports no JAX)
+
+if "jax" not in sys.modules:  # the command line's XLA_FLAGS: one CPU device per core, so the
+    # render is sharded over them, and XLA:CPU's small-loop threshold (`cpu_xla_flags`)
+    os.environ["XLA_FLAGS"] = cpu_xla_flags(os.environ.get("XLA_FLAGS", ""), os.cpu_count() or 1)
 
 import numpy as np
 

@@ -51,6 +51,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_render import LLVM_CANDIDATES, _time_at_error  # noqa: E402
 
+from radiometria.cli import cpu_xla_flags  # noqa: E402
 from tests.render._mitsuba import rel_mse  # noqa: E402
 
 PYTHON = sys.executable
@@ -308,9 +309,7 @@ def _warm_in_process(reference, args) -> float | None:
     against llvm_ad_spectral (None without libLLVM)."""
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         return None
-    os.environ.setdefault(
-        "XLA_FLAGS", f"--xla_force_host_platform_device_count={os.cpu_count() or 1}"
-    )
+    os.environ["XLA_FLAGS"] = cpu_xla_flags(os.environ.get("XLA_FLAGS", ""), os.cpu_count() or 1)
     from bench_render import _mitsuba as mitsuba_run, _ours as ours_run, _timed
 
     from radiometria.render import OwenSobol

@@ -382,17 +382,52 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _configure_cpu_devices(count: int | None) -> None:
-    """Give XLA `count` CPU devices (default: one per core), so renders shard over all cores.
+    """Give XLA `count` CPU devices (default: one per core), so renders shard over all cores,
+    and XLA:CPU's small-loop threshold (`radiometria._xla.cpu_xla_flags`).
 
     Sets `--xla_force_host_platform_device_count` in `XLA_FLAGS` unless it is already set there.
     It takes effect only if JAX has not initialised its backends yet (true when the command
     starts); accelerators, when present, are used as they are.
     """
-    flags = os.environ.get("XLA_FLAGS", "")
-    if "xla_force_host_platform_device_count" in flags:
-        return
     count = count or os.cpu_count() or 1
-    os.environ["XLA_FLAGS"] = f"{flags} --xla_force_host_platform_device_count={count}".strip()
+    os.environ["XLA_FLAGS"] = cpu_xla_flags(os.environ.get("XLA_FLAGS", ""), count)
+
+
+SMALL_LOOP_OPTION = "xla_cpu_small_while_loop_byte_threshold"
+SMALL_LOOP_BYTES = 4 << 20  # `cpu_xla_flags`
+
+
+def cpu_xla_flags(flags: str, device_count: int | None = None) -> str:
+    """`XLA_FLAGS` for a process that renders on the CPU: `flags` plus
+    `--xla_force_host_platform_device_count=<device_count>` (when given and not already set)
+    and XLA:CPU's small-loop threshold `SMALL_LOOP_BYTES` as a backend extra option (unless
+    `flags` already sets backend extra options, or `RADIOMETRIA_XLA_DEFAULTS` asks for XLA's
+    defaults). Takes effect only if set before JAX initialises its backends; the command line
+    and `benchmarks/` set it, a library user sets the same `XLA_FLAGS` (FAQ, "Which XLA
+    options does the renderer compile with?").
+
+    Why: XLA:CPU runs a program as a sequence of thunks, one per fusion, and pays a dispatch
+    for each on every iteration of a `while` loop. A loop whose buffers are small (below
+    `xla_cpu_small_while_loop_byte_threshold` bytes of HLO cost analysis, 1024 by default)
+    and that holds no custom call, scatter or sort is compiled instead into one function that
+    runs the whole loop. The tracking loops of a heterogeneous medium (a chunk of 256 paths
+    walking majorant cells, `radiometria.media.GridMedium`) are such loops, above the default:
+    `bench_media.py`'s heterogeneous scene (128 x 128, 16 spp, two CPU devices, warm) renders
+    in 0.69 s with a threshold of 4 MiB against 1.09 s with the default, the same image. The
+    Cornell box, textured, environment-map and homogeneous-medium scenes of `benchmarks/`
+    render in the same time (within 5 %) from 2 to 8 MiB and slower from 32 MiB, where the
+    search loops of `jnp.interp` over a whole batch are hoisted too. Larger density grids
+    raise a tracking loop's cost above 4 MiB (a 64^3 grid's is), and it runs as thunks again.
+    The threshold is a backend extra option, which `jax.jit`'s `compiler_options` cannot set,
+    so it travels in `XLA_FLAGS`.
+    """
+    out = flags.strip()
+    if device_count is not None and "xla_force_host_platform_device_count" not in out:
+        out = f"{out} --xla_force_host_platform_device_count={int(device_count)}"
+    wants_defaults = os.environ.get("RADIOMETRIA_XLA_DEFAULTS", "").strip().lower()
+    if wants_defaults in ("", "0", "false", "no") and "xla_backend_extra_options" not in out:
+        out = f"{out} --xla_backend_extra_options={SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}"
+    return out.strip()
 
 
 def main(argv: list[str] | None = None) -> int:

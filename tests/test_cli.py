@@ -12,8 +12,9 @@ import pytest
 
 from radiometria import _warmstart
 from radiometria.camera import read_exr
-from radiometria.cli import main
+from radiometria.cli import SMALL_LOOP_BYTES, SMALL_LOOP_OPTION, cpu_xla_flags, main
 from radiometria.render import _cache
+from radiometria.render._scenes._volume_files import write_vol
 
 RENDER = ["render", "cornell-box", "--width", "16", "--height", "16", "--spp", "2"]
 
@@ -205,9 +206,57 @@ def test_cpu_devices_flag_sets_xla_count_once(monkeypatch):
     assert os.environ["XLA_FLAGS"].split() == [
         "--xla_dump_to=/tmp/none",
         "--xla_force_host_platform_device_count=3",
+        f"--xla_backend_extra_options={SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}",
     ]
-    _configure_cpu_devices(5)  # a count already in XLA_FLAGS wins
+    _configure_cpu_devices(5)  # a count and extra options already in XLA_FLAGS win
     assert os.environ["XLA_FLAGS"].count("device_count") == 1
+    assert os.environ["XLA_FLAGS"].count("extra_options") == 1
+    monkeypatch.setenv("RADIOMETRIA_XLA_DEFAULTS", "1")
+    assert cpu_xla_flags("", 2) == "--xla_force_host_platform_device_count=2"
+
+
+_GRID_SCENE = """<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="35"/>
+    <transform name="to_world"><lookat origin="0, 0, 6" target="0, 0, 0" up="0, 1, 0"/>
+    </transform><film type="hdrfilm"><integer name="width" value="16"/>
+    <integer name="height" value="16"/></film></sensor>
+  <integrator type="volpath"><integer name="max_depth" value="4"/></integrator>
+  <shape type="rectangle"><transform name="to_world"><scale value="8"/><translate z="-3"/>
+    </transform><emitter type="area"><rgb name="radiance" value="1, 1, 1"/></emitter></shape>
+  <medium type="heterogeneous" id="grid"><volume name="sigma_t" type="gridvolume">
+    <string name="filename" value="{vol}"/><transform name="to_world"><scale value="2.4"/>
+    <translate value="-1.2, -1.2, -1.2"/></transform></volume></medium>
+  <shape type="cube"><transform name="to_world"><scale value="1.2"/></transform>
+    <bsdf type="null"/><ref name="interior" id="grid"/></shape>
+</scene>
+"""
+
+
+def test_command_line_compiles_the_grid_tracking_loops_into_single_functions(tmp_path):
+    """`cpu_xla_flags`' small-loop threshold reaches XLA: in the render step of a
+    heterogeneous medium, the tracking loops (a chunk of 256 paths, each with its int32 cell
+    `s32[256,3]`) are hoisted into XLA:CPU's single-function calls. With XLA's default
+    threshold (1024 bytes) no loop carrying that cell can be."""
+    z, y, x = np.meshgrid(*[(np.arange(8) + 0.5) / 8] * 3, indexing="ij")
+    write_vol(tmp_path / "ramp.vol", 0.1 + 2.0 * x * (1.2 - y) * (0.5 + z))
+    scene = tmp_path / "grid.xml"
+    scene.write_text(_GRID_SCENE.format(vol=tmp_path / "ramp.vol"))
+    dump = tmp_path / "dump"
+    env = dict(os.environ, XLA_FLAGS=f"--xla_dump_to={dump}", RADIOMETRIA_NO_CACHE="1")
+    out = subprocess.run(
+        _command() + ["--cpu-devices", "1", "render", str(scene), "--spp", "1", "--out",
+                      str(tmp_path / "x.exr")],
+        capture_output=True, text=True, timeout=600, env=env,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    steps = [p.read_text() for p in dump.glob("*jit__step.cpu_after_optimizations.txt")]
+    hoisted = [
+        line
+        for text in steps
+        for line in text.splitlines()
+        if 'xla_cpu_small_call="true"' in line and "s32[256,3]" in line
+    ]
+    assert steps and len(hoisted) >= 2, f"{len(steps)} step programs, {len(hoisted)} hoisted"
 
 
 def test_cpu_devices_must_be_positive(capsys):
