@@ -383,11 +383,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _configure_cpu_devices(count: int | None) -> None:
     """Give XLA `count` CPU devices (default: one per core), so renders shard over all cores,
-    and XLA:CPU's small-loop threshold (`radiometria._xla.cpu_xla_flags`).
+    and XLA:CPU's small-loop threshold (`cpu_xla_flags`).
 
-    Sets `--xla_force_host_platform_device_count` in `XLA_FLAGS` unless it is already set there.
-    It takes effect only if JAX has not initialised its backends yet (true when the command
-    starts); accelerators, when present, are used as they are.
+    Sets both in `XLA_FLAGS` unless they are already set there. It takes effect only if JAX
+    has not initialised its backends yet (true when the command starts); accelerators, when
+    present, are used as they are (the CPU backend's options do not concern them).
     """
     count = count or os.cpu_count() or 1
     os.environ["XLA_FLAGS"] = cpu_xla_flags(os.environ.get("XLA_FLAGS", ""), count)
@@ -400,11 +400,11 @@ SMALL_LOOP_BYTES = 4 << 20  # `cpu_xla_flags`
 def cpu_xla_flags(flags: str, device_count: int | None = None) -> str:
     """`XLA_FLAGS` for a process that renders on the CPU: `flags` plus
     `--xla_force_host_platform_device_count=<device_count>` (when given and not already set)
-    and XLA:CPU's small-loop threshold `SMALL_LOOP_BYTES` as a backend extra option (unless
-    `flags` already sets backend extra options, or `RADIOMETRIA_XLA_DEFAULTS` asks for XLA's
-    defaults). Takes effect only if set before JAX initialises its backends; the command line
-    and `benchmarks/` set it, a library user sets the same `XLA_FLAGS` (FAQ, "Which XLA
-    options does the renderer compile with?").
+    and XLA:CPU's small-loop threshold `SMALL_LOOP_BYTES` as a backend extra option (added to
+    the backend extra options `flags` may hold; not when `flags` already sets the threshold or
+    `RADIOMETRIA_XLA_DEFAULTS` asks for XLA's defaults). Takes effect only if set before JAX
+    initialises its backends; the command line and `benchmarks/` set it, a library user sets
+    the same `XLA_FLAGS` (FAQ, "Which XLA options does the renderer compile with?").
 
     Why: XLA:CPU runs a program as a sequence of thunks, one per fusion, and pays a dispatch
     for each on every iteration of a `while` loop. A loop whose buffers are small (below
@@ -424,10 +424,17 @@ def cpu_xla_flags(flags: str, device_count: int | None = None) -> str:
     out = flags.strip()
     if device_count is not None and "xla_force_host_platform_device_count" not in out:
         out = f"{out} --xla_force_host_platform_device_count={int(device_count)}"
+    # RADIOMETRIA_XLA_DEFAULTS as radiometria._xla reads it (that module imports JAX).
     wants_defaults = os.environ.get("RADIOMETRIA_XLA_DEFAULTS", "").strip().lower()
-    if wants_defaults in ("", "0", "false", "no") and "xla_backend_extra_options" not in out:
-        out = f"{out} --xla_backend_extra_options={SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}"
-    return out.strip()
+    if wants_defaults not in ("", "0", "false", "no") or SMALL_LOOP_OPTION in out:
+        return out.strip()
+    option = f"{SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}"
+    words = out.split()
+    for i, word in enumerate(words):  # the user's extra options keep theirs, and get ours
+        if word.startswith("--xla_backend_extra_options="):
+            words[i] = f"{word},{option}" if word.split("=", 1)[1] else f"{word}{option}"
+            return " ".join(words)
+    return f"{out} --xla_backend_extra_options={option}".strip()
 
 
 def main(argv: list[str] | None = None) -> int:

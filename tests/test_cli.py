@@ -201,6 +201,7 @@ def _unknown_figure():
 def test_cpu_devices_flag_sets_xla_count_once(monkeypatch):
     from radiometria.cli import _configure_cpu_devices
 
+    monkeypatch.delenv("RADIOMETRIA_XLA_DEFAULTS", raising=False)
     monkeypatch.setenv("XLA_FLAGS", "--xla_dump_to=/tmp/none")
     _configure_cpu_devices(3)
     assert os.environ["XLA_FLAGS"].split() == [
@@ -211,6 +212,12 @@ def test_cpu_devices_flag_sets_xla_count_once(monkeypatch):
     _configure_cpu_devices(5)  # a count and extra options already in XLA_FLAGS win
     assert os.environ["XLA_FLAGS"].count("device_count") == 1
     assert os.environ["XLA_FLAGS"].count("extra_options") == 1
+    assert cpu_xla_flags("--xla_backend_extra_options=a=1") == (
+        f"--xla_backend_extra_options=a=1,{SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}"
+    )
+    assert cpu_xla_flags(f"--xla_backend_extra_options={SMALL_LOOP_OPTION}=8") == (
+        f"--xla_backend_extra_options={SMALL_LOOP_OPTION}=8"
+    )
     monkeypatch.setenv("RADIOMETRIA_XLA_DEFAULTS", "1")
     assert cpu_xla_flags("", 2) == "--xla_force_host_platform_device_count=2"
 
@@ -242,7 +249,10 @@ def test_command_line_compiles_the_grid_tracking_loops_into_single_functions(tmp
     scene = tmp_path / "grid.xml"
     scene.write_text(_GRID_SCENE.format(vol=tmp_path / "ramp.vol"))
     dump = tmp_path / "dump"
-    env = dict(os.environ, XLA_FLAGS=f"--xla_dump_to={dump}", RADIOMETRIA_NO_CACHE="1")
+    env = dict(
+        os.environ, XLA_FLAGS=f"--xla_dump_to={dump}", RADIOMETRIA_NO_CACHE="1", JAX_PLATFORMS="cpu"
+    )
+    env.pop("RADIOMETRIA_XLA_DEFAULTS", None)
     out = subprocess.run(
         _command() + ["--cpu-devices", "1", "render", str(scene), "--spp", "1", "--out",
                       str(tmp_path / "x.exr")],
