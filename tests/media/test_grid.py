@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import quad
+from scipy.interpolate import RegularGridInterpolator
 
 from radiometria.media import GridMedium, IsotropicPhaseFunction, trilinear_lookup
 
@@ -43,6 +44,20 @@ def test_trilinear_lookup_reproduces_an_affine_field_between_voxel_centres():
     # Outside the unit box the medium is empty; at the faces values are clamped.
     out = trilinear_lookup(jnp.asarray(grid), jnp.asarray([[1.1, 0.5, 0.5], [0.0, 0.0, 0.0]]))
     np.testing.assert_allclose(np.asarray(out), [0.0, grid[0, 0, 0]], rtol=1e-12)
+
+
+@pytest.mark.parametrize("shape", [(4, 5, 6), (33, 34, 35)], ids=["corner gathers", "one gather"])
+def test_trilinear_lookup_equals_scipy_on_a_random_grid(shape):
+    """Both ways of reading the grid (corner by corner; one gather above 32^3 voxels) equal
+    SciPy's `RegularGridInterpolator` between the voxel centres, clamped towards the faces."""
+    rng = np.random.default_rng(1)
+    grid = rng.random(shape)
+    centres = [(np.arange(n) + 0.5) / n for n in shape]  # z, y, x
+    p = rng.random((500, 3))  # x, y, z in the unit box, also between the faces and centres
+    clamped = np.stack([np.clip(p[:, 2 - i], c[0], c[-1]) for i, c in enumerate(centres)], -1)
+    want = RegularGridInterpolator(centres, grid)(clamped)
+    got = np.asarray(trilinear_lookup(jnp.asarray(grid), jnp.asarray(p)))
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-14)
 
 
 def _medium(s, albedo=0.8):
