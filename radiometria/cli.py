@@ -416,8 +416,9 @@ def cpu_xla_flags(flags: str, device_count: int | None = None) -> str:
     in 0.69 s with a threshold of 4 MiB against 1.09 s with the default, the same image. The
     Cornell box, textured, environment-map and homogeneous-medium scenes of `benchmarks/`
     render in the same time (within 5 %) from 2 to 8 MiB and slower from 32 MiB, where the
-    search loops of `jnp.interp` over a whole batch are hoisted too. Larger density grids
-    raise a tracking loop's cost above 4 MiB (a 64^3 grid's is), and it runs as thunks again.
+    search loops of `jnp.interp` over a whole batch are hoisted too. The density grid counts
+    in a tracking loop's cost: a 64^3 grid stays below 4 MiB (`trilinear_lookup` reads it by
+    one gather), a 128^3 grid does not, and its loops run as thunks.
     The threshold is a backend extra option, which `jax.jit`'s `compiler_options` cannot set,
     so it travels in `XLA_FLAGS`.
     """
