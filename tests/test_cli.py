@@ -243,7 +243,8 @@ def test_command_line_compiles_the_grid_tracking_loops_into_single_functions(tmp
     """`cpu_xla_flags`' small-loop threshold reaches XLA: in the render step of a
     heterogeneous medium, the tracking loops (a chunk of 256 paths, each with its int32 cell
     `s32[256,3]`) are hoisted into XLA:CPU's single-function calls. With XLA's default
-    threshold (1024 bytes) no loop carrying that cell can be."""
+    threshold (1024 bytes) no loop carrying that cell can be. Skipped on a jaxlib whose XLA:CPU
+    hoists no loop at all (older than the pass, or without it)."""
     z, y, x = np.meshgrid(*[(np.arange(8) + 0.5) / 8] * 3, indexing="ij")
     write_vol(tmp_path / "ramp.vol", 0.1 + 2.0 * x * (1.2 - y) * (0.5 + z))
     scene = tmp_path / "grid.xml"
@@ -260,12 +261,12 @@ def test_command_line_compiles_the_grid_tracking_loops_into_single_functions(tmp
     )  # fmt: skip
     assert out.returncode == 0, out.stderr
     steps = [p.read_text() for p in dump.glob("*jit__step.cpu_after_optimizations.txt")]
-    hoisted = [
-        line
-        for text in steps
-        for line in text.splitlines()
-        if 'xla_cpu_small_call="true"' in line and "s32[256,3]" in line
+    calls = [
+        line for text in steps for line in text.splitlines() if 'xla_cpu_small_call="true"' in line
     ]
+    if steps and not calls:  # even the sampler's tiny seed loop runs as thunks
+        pytest.skip("this jaxlib's XLA:CPU hoists no small loops")
+    hoisted = [line for line in calls if "s32[256,3]" in line]
     assert steps and len(hoisted) >= 2, f"{len(steps)} step programs, {len(hoisted)} hoisted"
 
 
