@@ -125,10 +125,7 @@ def trilinear_lookup(grid: Float[Array, "z y x"], p: Float[Array, "n 3"]) -> Flo
     # heterogeneous scene with a 64^3 grid (128 x 128, 16 spp, warm). A smaller grid is read
     # corner by corner, which is faster there (16^3: 0.67 s against 0.74 s).
     g = grid.astype(p.dtype)
-    flat = g.reshape(-1)
-    one_gather = grid.size > _ONE_GATHER_VOXELS
-    out = jnp.zeros(p.shape[:1], p.dtype)
-    index, weight = [], []
+    corners = []  # (iz, iy, ix, weight) of the 8 corners
     for cz in (0, 1):
         iz = i1[:, 2] if cz else i0[:, 2]
         wz = a[:, 2] if cz else 1.0 - a[:, 2]
@@ -137,15 +134,13 @@ def trilinear_lookup(grid: Float[Array, "z y x"], p: Float[Array, "n 3"]) -> Flo
             wy = a[:, 1] if cy else 1.0 - a[:, 1]
             for cx in (0, 1):
                 ix = i1[:, 0] if cx else i0[:, 0]
-                w = wz * wy * (a[:, 0] if cx else 1.0 - a[:, 0])
-                if one_gather:
-                    index.append((iz * ny + iy) * nx + ix)
-                    weight.append(w)
-                else:
-                    out = out + w * g[iz, iy, ix]
-    if one_gather:
-        values = flat.at[jnp.stack(index, axis=-1)].get(mode="promise_in_bounds")  # clamped
-        out = jnp.sum(jnp.stack(weight, axis=-1) * values, axis=-1)
+                corners.append((iz, iy, ix, wz * wy * (a[:, 0] if cx else 1.0 - a[:, 0])))
+    if grid.size > _ONE_GATHER_VOXELS:
+        index = jnp.stack([(iz * ny + iy) * nx + ix for iz, iy, ix, _ in corners], axis=-1)
+        values = g.reshape(-1).at[index].get(mode="promise_in_bounds")  # clamped above
+        out = jnp.sum(jnp.stack([w for *_, w in corners], axis=-1) * values, axis=-1)
+    else:
+        out = sum(w * g[iz, iy, ix] for iz, iy, ix, w in corners)
     return jnp.where(inside, out, 0.0)
 
 
