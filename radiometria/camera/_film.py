@@ -38,6 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
+from .._math import interp_columns
 from .._types import Array, ArrayLike, Float
 from ..colorimetry import get_cmfs, get_colourspace
 from ._filters import AbstractFilter
@@ -263,9 +264,7 @@ def film_samples_to_XYZ(
     p = jnp.broadcast_to(p.astype(dtype), L.shape)
     table_wl = film.cmf_wavelengths_nm.astype(dtype)
     table = film.cmf_values.astype(dtype)
-    cmf = jnp.stack(
-        [jnp.interp(wl, table_wl, table[:, c], left=0.0, right=0.0) for c in range(3)], axis=-1
-    )
+    cmf = interp_columns(wl, table_wl, table, left=0.0, right=0.0)
     ok = p > 0
     inv_p = jnp.where(ok, 1.0 / jnp.where(ok, p, 1.0), 0.0)
     contrib = (L * inv_p)[..., None] * cmf  # (..., n_lambda, 3)

@@ -33,6 +33,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._checks import as_float_array, check_choice
+from .._math import interp_columns
 from ..radiometry import AbstractSpectrum
 
 _DATA_DIR = Path(__file__).parent / "data"
@@ -132,12 +133,7 @@ def interpolate_table(
     xp = jnp.asarray(table_wavelengths, dtype=dtype)
     fp = jnp.asarray(table_values, dtype=dtype)
     left = right = 0.0 if extrapolation == "zero" else None
-    if fp.ndim == 1:
-        return jnp.interp(wavelength_nm, xp, fp, left=left, right=right)
-    cols = [
-        jnp.interp(wavelength_nm, xp, fp[:, j], left=left, right=right) for j in range(fp.shape[1])
-    ]
-    return jnp.stack(cols, axis=-1)
+    return interp_columns(wavelength_nm, xp, fp, left=left, right=right)
 
 
 def resolve_observer(observer: str, *, allow_rgb: bool = True) -> str:

@@ -48,7 +48,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_broadcastable, check_choice, check_positive, lookup
-from .._math import align_ranks
+from .._math import align_ranks, interp_columns
 
 __all__ = [
     "CONDUCTORS",
@@ -191,8 +191,8 @@ class TabulatedIOR(eqx.Module):
         lam = as_float_array(wavelength_nm, "wavelength_nm")
         lam = check_positive(lam, "wavelength_nm", "nm")
         dt = lam.dtype
-        eta = jnp.interp(lam, self.wavelengths_eta_nm.astype(dt), self.eta.astype(dt))
-        k = jnp.interp(lam, self.wavelengths_k_nm.astype(dt), self.k.astype(dt))
+        eta = interp_columns(lam, self.wavelengths_eta_nm.astype(dt), self.eta.astype(dt))
+        k = interp_columns(lam, self.wavelengths_k_nm.astype(dt), self.k.astype(dt))
         return eta, k
 
 

@@ -33,6 +33,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
+from .._math import interp_columns
 from ..colorimetry import get_colourspace
 from ..radiometry import AbstractSpectrum
 from ._forward import forward_model
@@ -179,7 +180,7 @@ class RGBIlluminantSpectrum(AbstractSpectrum):
         the table). [relative]"""
         wl = as_float_array(wavelength_nm, "wavelength_nm")
         dtype = common_float_dtype(wl, self.illuminant_values)
-        return jnp.interp(
+        return interp_columns(
             wl.astype(dtype),
             self.illuminant_wavelengths_nm.astype(dtype),
             self.illuminant_values.astype(dtype),

@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._math import interp_columns
 from ...colorimetry import get_cmfs
 from ...scattering import PrincipledBxDF, PrincipledThinBxDF, principled_eta
 from ...upsampling import RGBAlbedoSpectrum
@@ -43,7 +44,7 @@ def path_luminance(color: Float[Array, "n k"], wavelength_nm: Float[Array, "n k"
     path's wavelengths of $\\bar y(\\lambda)\\,C(\\lambda)$ (no division by the wavelength
     density), `(n,)`; the principled BSDF's tints divide by it."""
     wl, y = _ybar()
-    ybar = jnp.interp(wavelength_nm, jnp.asarray(wl, color.dtype), jnp.asarray(y, color.dtype))
+    ybar = interp_columns(wavelength_nm, jnp.asarray(wl, color.dtype), jnp.asarray(y, color.dtype))
     return jnp.mean(ybar * color, axis=-1)
 
 

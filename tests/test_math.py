@@ -1,0 +1,68 @@
+"""The floor-1 array helpers (`radiometria._math`) against NumPy and JAX's own functions."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from radiometria._math import interp_columns
+
+
+def _table(rng, n=37, columns=3):
+    xp = np.sort(rng.uniform(360.0, 830.0, n))
+    xp[5] = xp[4]  # a repeated knot: jnp.interp's zero-width guard
+    return xp, rng.normal(size=(n, columns))
+
+
+def test_interp_columns_equals_numpy_and_jnp_interp_per_column():
+    """Every column is `np.interp` of that column (inside, at the knots, outside, with and
+    without `left`/`right`), and `jnp.interp` to rounding."""
+    rng = np.random.default_rng(3)
+    xp, fp = _table(rng)
+    x = np.concatenate([rng.uniform(300.0, 900.0, (40,)), xp, [xp[0], xp[-1], 200.0, 1000.0]])
+    x = x.reshape(3, -1)
+    for left, right in ((None, None), (0.0, 0.0), (-2.0, 5.0)):
+        got = np.asarray(
+            interp_columns(jnp.asarray(x), jnp.asarray(xp), jnp.asarray(fp), left, right)
+        )
+        assert got.shape == (*x.shape, fp.shape[1])
+        for c in range(fp.shape[1]):
+            want = np.interp(x, xp, fp[:, c], left=left, right=right)
+            np.testing.assert_allclose(got[..., c], want, rtol=1e-13, atol=1e-13)
+            same = jnp.interp(x, xp, fp[:, c], left=left, right=right)
+            np.testing.assert_allclose(got[..., c], np.asarray(same), rtol=4e-16, atol=4e-16)
+
+
+def test_interp_columns_one_column_table_and_scalar_query():
+    rng = np.random.default_rng(4)
+    xp, fp = _table(rng, columns=1)
+    got = interp_columns(500.0, jnp.asarray(xp), jnp.asarray(fp[:, 0]))
+    assert got.shape == ()
+    np.testing.assert_allclose(float(got), np.interp(500.0, xp, fp[:, 0]), rtol=1e-13)
+
+
+def test_interp_columns_gradients_equal_jnp_interp():
+    """d/dx and d/dfp, including at a knot, at a repeated knot and outside the table."""
+    rng = np.random.default_rng(5)
+    xp, fp = _table(rng, columns=2)
+    x = jnp.asarray([400.0, xp[7], xp[4], 350.0, 850.0])
+
+    def ours(x, fp):
+        return jnp.sum(interp_columns(x, jnp.asarray(xp), fp, left=0.0, right=0.0) ** 2)
+
+    def theirs(x, fp):
+        cols = [jnp.interp(x, jnp.asarray(xp), fp[:, c], left=0.0, right=0.0) for c in range(2)]
+        return sum(jnp.sum(v**2) for v in cols)
+
+    g_ours = jax.jit(jax.grad(ours, argnums=(0, 1)))(x, jnp.asarray(fp))
+    g_theirs = jax.grad(theirs, argnums=(0, 1))(x, jnp.asarray(fp))
+    for a, b in zip(g_ours, g_theirs, strict=True):
+        assert np.all(np.isfinite(np.asarray(a)))
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-14)
+
+
+def test_interp_columns_refuses_mismatched_tables():
+    with pytest.raises(ValueError, match=r"`fp` \(n, \.\.\.\) with the same n"):
+        interp_columns(jnp.ones(3), jnp.arange(5.0), jnp.ones((4, 3)))
+    with pytest.raises(ValueError, match="at least 2 samples"):
+        interp_columns(jnp.ones(3), jnp.arange(1.0), jnp.ones((1,)))
