@@ -4,6 +4,9 @@ Each keeps finite gradients at its singular point with the double-where trick (s
 section 8): the unsafe operation never sees the value at which its derivative is infinite.
 """
 
+import functools
+
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
@@ -65,6 +68,7 @@ def interpolation_weights(grid: Array, x: Array, extrapolation: str):
     return i0, i1, t, outside
 
 
+@functools.partial(jax.jit, static_argnames=("left", "right"))
 def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike, left=None, right=None) -> Array:
     """`jnp.interp` of every column of a table at once: `fp` (n, *columns), result
     `x.shape + columns`, with `left`/`right` (scalars; default `fp[0]`/`fp[-1]`) outside `xp`.
@@ -73,6 +77,7 @@ def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike, left=None, right=
     search for all columns instead of one per column, and that search is unrolled
     (`searchsorted(method="scan_unrolled")`: log2(n) gathers) instead of a `while` loop, which
     XLA:CPU runs as one dispatch per step and per array operation for the whole batch.
+    Jitted (as `jnp.interp` is), with `left`/`right` static: Python numbers or None.
     """
     x, xp, fp = jnp.asarray(x), jnp.asarray(xp), jnp.asarray(fp)
     n = xp.shape[0]
