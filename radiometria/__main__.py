@@ -1,6 +1,6 @@
 """`python -m radiometria` runs the command-line interface."""
 
-from .cli import main
+from .cli import entry
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    entry()

@@ -1,5 +1,6 @@
 """The `radiometria` command: help, `render` to EXR and PNG, and bad arguments (exit 2)."""
 
+import logging
 import os
 import signal
 import subprocess
@@ -7,9 +8,11 @@ import sys
 import time
 from pathlib import Path
 
+import jax
 import numpy as np
 import pytest
 
+import radiometria.cli as cli
 from radiometria import _warmstart
 from radiometria.camera import read_exr
 from radiometria.cli import SMALL_LOOP_BYTES, SMALL_LOOP_OPTION, cpu_xla_flags, main
@@ -378,3 +381,33 @@ def test_render_command_picks_flag_then_file_then_sobol(
         str(scene), spp=1, width=2, height=2, seed=0, max_depth=None, sampler=flag
     )
     assert seen["sampler"].NAME == expected and meta["sampler"] == expected
+
+
+def test_the_console_command_flushes_then_exits_at_once(monkeypatch, capsys):
+    """`entry` (the console script and `python -m radiometria`) hands `main`'s status to
+    `os._exit` after flushing stdout, stderr and the logging handlers, once JAX is loaded
+    and no `jax.distributed` cluster is joined; else it exits the usual way."""
+    events = []
+    monkeypatch.setattr(cli, "main", lambda: print("rendered") or 3)
+    monkeypatch.setattr(logging, "shutdown", lambda: events.append("logging"))
+
+    def fast_exit(status):
+        events.append(("os._exit", status, capsys.readouterr().out))
+        raise SystemExit(status)  # the test process goes on
+
+    monkeypatch.setattr(cli.os, "_exit", fast_exit)
+    monkeypatch.setattr(cli, "_distributed", lambda: False)
+    with pytest.raises(SystemExit):
+        cli.entry()
+    assert events == ["logging", ("os._exit", 3, "rendered\n")]
+
+    events.clear()
+    monkeypatch.setattr(cli, "_distributed", lambda: True)
+    with pytest.raises(SystemExit) as exit_info:
+        cli.entry()
+    assert exit_info.value.code == 3 and events == ["logging"]  # sys.exit, not os._exit
+
+
+def test_distributed_is_false_in_a_single_process():
+    jax.devices()
+    assert cli._distributed() is False
