@@ -574,7 +574,6 @@ def run_entry(
     progress: bool = True,
     checkpoint_every: float | None = None,
     on_checkpoint: Callable | None = None,
-    after_first_step: Callable | None = None,
 ):
     """Render from a step entry: the loop of `radiometria.render.render` (same steps, same
     order, same programs) without the renderer.
@@ -586,7 +585,6 @@ def run_entry(
     - `progress`: show a tqdm progress bar on stderr.
     - `checkpoint_every`, `on_checkpoint`: every `checkpoint_every` seconds [s], and when
         interrupted before the end, `on_checkpoint(xyz_sum, weight_sum, steps_done)`.
-    - `after_first_step`: called once the first step is dispatched (the devices are busy).
 
     **Returns:**
 
@@ -625,8 +623,6 @@ def run_entry(
             film = step(*film, *kernel, key_data, spp_arr, np.int32(group * passes), pixel)
             if i == 0:
                 mark("first step dispatched" + jax_activity.summary())
-                if after_first_step is not None:
-                    after_first_step()
             if serialise or on_checkpoint is not None:
                 film = jax.block_until_ready(film)
             done = i + 1

@@ -21,10 +21,8 @@ load, scene compile, the first step's trace and compile or cache load, render, i
 """
 
 import argparse
-import importlib
 import os
 import sys
-import threading
 from pathlib import Path
 
 from ._timing import TIMING_ENV, mark, timing_enabled
@@ -219,21 +217,16 @@ def _render_from_entry(args: argparse.Namespace, opts, entry) -> int:
 
         save_checkpoint(opts.checkpoint, xyz_sum, weight_sum, done, identity)
 
-    # The image writer's module (radiometria.camera, about 0.5 s of imports) loads while the
-    # devices render.
-    writer = threading.Thread(target=importlib.import_module, args=("radiometria.camera",))
     image, reached, stopped = warm.run_entry(
         entry,
         spp=opts.spp,
         seed=opts.seed,
         checkpoint_every=args.checkpoint_every,
         on_checkpoint=on_checkpoint,
-        after_first_step=writer.start,
     )
-    if writer.is_alive():
-        writer.join()
     mark("rendered" + warm.jax_activity.summary())
-    from .camera import write_exr, write_png
+    # NumPy-only writers: radiometria.camera would import JAX's modules (about 0.3 s).
+    from ._image_files import write_exr, write_png
 
     settings = dict(scene=str(args.scene), spp=opts.spp, seed=opts.seed)
     out = opts.out

@@ -15,6 +15,7 @@ FLOORS = {
     "_xla": 1,
     "_native_build": 2,  # compiles the native kernels' library: no JAX, floor-1 helpers only
     "_warmstart": 2,  # the command line's warm start: JAX, NumPy and floor-1 helpers only
+    "_image_files": 2,  # image files (radiometria.camera exports them): NumPy and floor 1 only
     "radiometry": 2, "montecarlo": 2,
     "photometry": 3, "colorimetry": 3,
     "upsampling": 4, "scattering": 4, "camera": 4, "media": 4,

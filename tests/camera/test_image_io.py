@@ -1,6 +1,9 @@
 """Image files: EXR round trip (bit-exact float32, metadata), spectral EXR layout, sRGB PNG,
 atomic writes and clear errors."""
 
+import subprocess
+import sys
+
 import colour
 import matplotlib.image as mpimg
 import numpy as np
@@ -8,6 +11,8 @@ import OpenEXR
 import pytest
 
 import radiometria.camera as cam
+from radiometria import _image_files
+from radiometria.colorimetry import srgb_eotf_inverse
 
 
 def _image(h=5, w=7, c=3, seed=0):
@@ -166,3 +171,19 @@ def test_concurrent_writers_leave_one_complete_file(tmp_path):
     final, _ = read_exr(path)
     assert float(final[0, 0, 0]) in (0.25, 0.75) and np.unique(final).size == 1
     assert not [p for p in tmp_path.iterdir() if p.name != "race.exr"]  # no temporaries left
+
+
+def test_png_encoding_is_the_colorimetry_srgb_encoding():
+    """The NumPy sRGB encoding of the PNG writer is `colorimetry.srgb_eotf_inverse`."""
+    x = np.concatenate([np.linspace(0.0, 1.0, 1001), [0.0031308, 0.0031309, 1e-6]])
+    np.testing.assert_allclose(
+        _image_files._srgb_encode(x), np.asarray(srgb_eotf_inverse(x)), rtol=1e-14, atol=1e-15
+    )
+
+
+def test_image_files_load_without_jax():
+    """The command line writes a warm-started render's image without importing JAX's
+    modules: the image-file module needs NumPy only."""
+    code = "import sys, radiometria._image_files; print('jax' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0 and out.stdout.strip() == "False", out.stderr
