@@ -24,6 +24,15 @@ Conventions (Mitsuba 3's, which the reference scenes use):
   (Mitsuba's spectral film normalisation: a constant spectrum $L = 1$ gives $Y = 1$).
 """
 
+from .._image_files import (
+    read_exr as read_exr,
+    read_hdr as read_hdr,
+    read_spectral_exr as read_spectral_exr,
+    spectral_channel_name as spectral_channel_name,
+    write_exr as write_exr,
+    write_png as write_png,
+    write_spectral_exr as write_spectral_exr,
+)
 from ._base import (
     AbstractCamera as AbstractCamera,
     CameraWiSample as CameraWiSample,
@@ -48,15 +57,6 @@ from ._filters import (
     LanczosFilter as LanczosFilter,
     MitchellFilter as MitchellFilter,
     TentFilter as TentFilter,
-)
-from ._io import (
-    read_exr as read_exr,
-    read_hdr as read_hdr,
-    read_spectral_exr as read_spectral_exr,
-    spectral_channel_name as spectral_channel_name,
-    write_exr as write_exr,
-    write_png as write_png,
-    write_spectral_exr as write_spectral_exr,
 )
 from ._orthographic import OrthographicCamera as OrthographicCamera
 from ._pinhole import (
