@@ -438,7 +438,7 @@ def entry() -> None:
     process ends at once once its output is flushed.
 
     Python's normal exit tears down what the render built: XLA's compiled programs, its
-    thread pools and clients, the modules of JAX and of the renderer. That took 0.3-0.5 s of
+    thread pools and clients, the modules of JAX and of the renderer. That took 0.3-0.4 s of
     a 2-2.5 s warm `radiometria render cornell-box --spp 16` (2 cores), time in which the
     user waits for the prompt while nothing is left to do: the image and any checkpoint are
     written (atomically) and the compilation caches are written when programs compile.
