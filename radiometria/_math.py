@@ -9,10 +9,20 @@ import functools
 import jax
 import jax.numpy as jnp
 import numpy as np
+import numpy.typing as npt
 from jax import Array
 from jax.typing import ArrayLike
 
-__all__ = ["align_ranks", "dot", "interp_columns", "interpolation_weights", "safe_div", "safe_sqrt"]
+__all__ = [
+    "align_ranks",
+    "dot",
+    "interp_columns",
+    "interp_uniform_columns",
+    "interpolation_weights",
+    "safe_div",
+    "safe_sqrt",
+    "uniform_grid",
+]
 
 
 def safe_sqrt(x: Array, *, propagate_nan: bool = False) -> Array:
@@ -95,6 +105,51 @@ def interp_columns(x: ArrayLike, xp: ArrayLike, fp: ArrayLike, left=None, right=
     dx0 = jnp.abs(dx) <= epsilon  # jnp.interp's guard against NaN gradients at tiny steps
     f = jnp.where(dx0, lo, lo + (delta / jnp.where(dx0, 1, dx)) * (hi - lo))
     below, above = (x < xp[0])[(..., *tail)], (x > xp[-1])[(..., *tail)]
+    lead = (None,) * x.ndim
+    f = jnp.where(below, fp[0][lead] if left is None else left, f)
+    return jnp.where(above, fp[-1][lead] if right is None else right, f)
+
+
+def uniform_grid(xp: npt.ArrayLike) -> tuple[float, float] | None:
+    """`(start, step)` when the knots `xp` (1-D, increasing, host values) are
+    `start + step * arange(n)` to a relative 1e-9 of the step, else None: the Python floats
+    `interp_uniform_columns` takes."""
+    xp = np.asarray(xp, dtype=np.float64)
+    if xp.ndim != 1 or xp.shape[0] < 2:
+        return None
+    step = (xp[-1] - xp[0]) / (xp.shape[0] - 1)
+    if not step > 0 or np.max(np.abs(np.diff(xp) - step)) > 1e-9 * step:
+        return None
+    return float(xp[0]), float(step)
+
+
+@functools.partial(jax.jit, static_argnames=("start", "step", "left", "right"))
+def interp_uniform_columns(
+    x: ArrayLike, start: float, step: float, fp: ArrayLike, left=None, right=None
+) -> Array:
+    """`interp_columns` for the evenly spaced knots `xp = start + step * arange(n)` (`start`,
+    `step > 0`: Python floats, as `uniform_grid` gives them): `fp` (n, *columns), result
+    `x.shape + columns`, `left`/`right` outside the knots (default `fp[0]`/`fp[-1]`).
+
+    The interval of `x` is `floor((x - start) / step)`: two gathers of table rows, where
+    `interp_columns` searches with log2(n) gathers (a 471-knot colour-matching table looked up
+    at 262144 wavelengths on XLA:CPU: 15 ms of searching per lookup). Values equal
+    `interp_columns`' to rounding; gradients in `x` and `fp` likewise.
+    """
+    x, fp = jnp.asarray(x), jnp.asarray(fp)
+    n = fp.shape[0]
+    if not (step > 0 and n >= 2):
+        raise ValueError(
+            f"`step` must be > 0 and `fp` hold n >= 2 rows; got {step} and {fp.shape}."
+        )
+    s = (x - start) / step  # position in knot intervals
+    knot = jnp.clip(jnp.floor(s), 0, n - 2)
+    i = knot.astype(jnp.int32)
+    tail = (None,) * (fp.ndim - 1)
+    lo, hi = fp[i], fp[i + 1]
+    f = lo + (s - knot)[(..., *tail)] * (hi - lo)
+    below = (x < start)[(..., *tail)]
+    above = (x > start + step * (n - 1))[(..., *tail)]
     lead = (None,) * x.ndim
     f = jnp.where(below, fp[0][lead] if left is None else left, f)
     return jnp.where(above, fp[-1][lead] if right is None else right, f)

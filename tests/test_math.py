@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from radiometria._math import interp_columns
+from radiometria._math import interp_columns, interp_uniform_columns, uniform_grid
 
 
 def _table(rng, n=37, columns=3):
@@ -66,3 +66,36 @@ def test_interp_columns_refuses_mismatched_tables():
         interp_columns(jnp.ones(3), jnp.arange(5.0), jnp.ones((4, 3)))
     with pytest.raises(ValueError, match="at least 2 samples"):
         interp_columns(jnp.ones(3), jnp.arange(1.0), jnp.ones((1,)))
+
+
+def test_interp_uniform_columns_equals_interp_columns():
+    """Evenly spaced knots: same values as the searched lookup inside, at and between knots,
+    at the ends and outside, with and without `left`/`right`; gradients in x and fp too."""
+    rng = np.random.default_rng(6)
+    xp = 360.0 + 5.0 * np.arange(95)
+    assert uniform_grid(xp) == (360.0, 5.0)
+    fp = jnp.asarray(rng.random((95, 3)))
+    x = jnp.asarray(np.concatenate([rng.uniform(340, 850, 200), xp[[0, 7, 94]], [362.5]]))
+    for left, right in [(None, None), (0.0, 0.0), (-1.0, 2.0)]:
+        got = interp_uniform_columns(x, 360.0, 5.0, fp, left=left, right=right)
+        want = interp_columns(x, jnp.asarray(xp), fp, left=left, right=right)
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-13, atol=1e-14)
+
+    def loss(f, x, fp):
+        return jnp.sum(f(x, fp) ** 2)
+
+    inside = x[(x > 360.0) & (x < xp[-1])]
+    ours = jax.grad(loss, argnums=(1, 2))(
+        lambda x, fp: interp_uniform_columns(x, 360.0, 5.0, fp), inside, fp
+    )
+    ref = jax.grad(loss, argnums=(1, 2))(lambda x, fp: interp_columns(x, xp, fp), inside, fp)
+    for a, b in zip(ours, ref, strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-13)
+
+
+def test_uniform_grid_refuses_uneven_knots():
+    assert uniform_grid([1.0, 2.0, 3.5]) is None
+    assert uniform_grid([1.0]) is None
+    assert uniform_grid([3.0, 2.0, 1.0]) is None
+    start, step = uniform_grid(np.linspace(360.0, 830.0, 471))
+    assert (start, step) == (360.0, 1.0)

@@ -38,7 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
-from .._math import interp_columns
+from .._math import interp_columns, interp_uniform_columns, uniform_grid
 from .._types import Array, ArrayLike, Float
 from ..colorimetry import get_cmfs, get_colourspace
 from ._filters import AbstractFilter
@@ -95,15 +95,16 @@ def _cmf_table(cmfs, observer: str) -> tuple[np.ndarray, np.ndarray]:
     return wl, values
 
 
-def _normalised_cmfs(cmfs, observer: str, dtype) -> tuple[Array, Array]:
-    r"""The CIE table and its values divided by $\int\bar y$, as arrays of `dtype`."""
+def _normalised_cmfs(cmfs, observer: str, dtype) -> tuple[Array, Array, tuple | None]:
+    r"""The CIE table and its values divided by $\int\bar y$, as arrays of `dtype`, and the
+    table's `(start, step)` [nm] when its wavelengths are evenly spaced (`uniform_grid`)."""
     if dtype is None:
         dtype = jnp.zeros(()).dtype  # the default float (float64 under jax_enable_x64)
     if not jnp.issubdtype(dtype, jnp.floating):
         raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
     wl, values = _cmf_table(cmfs, observer)
     y_integral = np.trapezoid(values[:, 1], wl)
-    return jnp.asarray(wl, dtype), jnp.asarray(values / y_integral, dtype)
+    return jnp.asarray(wl, dtype), jnp.asarray(values / y_integral, dtype), uniform_grid(wl)
 
 
 class SpectralResponse(eqx.Module):
@@ -120,7 +121,9 @@ class SpectralResponse(eqx.Module):
 
     **Fields:**
 
-    `cmf_wavelengths_nm` (n,) [nm], `cmf_values` (n, 3) [nm^-1] (normalised CMFs).
+    `cmf_wavelengths_nm` (n,) [nm], `cmf_values` (n, 3) [nm^-1] (normalised CMFs),
+    `cmf_grid_nm`: `(start, step)` [nm] of evenly spaced CMF wavelengths (static; `None` when
+    they are not), with which `film_samples_to_XYZ` finds a wavelength's row without a search.
 
     !!! note "Thesis"
         Eq. 2.12-2.14 (tristimulus integrals), section 2.3.2.
@@ -131,6 +134,7 @@ class SpectralResponse(eqx.Module):
 
     cmf_wavelengths_nm: Float[Array, " n"]
     cmf_values: Float[Array, "n 3"]
+    cmf_grid_nm: tuple[float, float] | None = eqx.field(static=True, default=None)
 
     @classmethod
     def from_observer(
@@ -169,7 +173,7 @@ class Film(eqx.Module):
 
     `xyz_sum` (H, W, 3), `weight_sum` (H, W), `spectral_sum` (H, W, n) or `None`,
     `cmf_wavelengths_nm` (n,) [nm], `cmf_values` (n, 3) [nm^-1] (normalised CMFs), `width`,
-    `height`, `spectral_bins` (static).
+    `height`, `spectral_bins`, `cmf_grid_nm` (static; as `SpectralResponse`'s).
 
     !!! note "Thesis"
         Thesis section 2.3.2, eq. 2.34-2.35; section 2.2 (XYZ).
@@ -186,6 +190,7 @@ class Film(eqx.Module):
     cmf_values: Float[Array, "n 3"]
     spectral_sum: Float[Array, "H W bins"] | None
     spectral_bins: int | None = eqx.field(static=True)
+    cmf_grid_nm: tuple[float, float] | None = eqx.field(static=True)
 
     def __init__(
         self,
@@ -199,7 +204,9 @@ class Film(eqx.Module):
     ):
         self.width = check_positive_int(width, "width")
         self.height = check_positive_int(height, "height")
-        self.cmf_wavelengths_nm, self.cmf_values = _normalised_cmfs(cmfs, observer, dtype)
+        self.cmf_wavelengths_nm, self.cmf_values, self.cmf_grid_nm = _normalised_cmfs(
+            cmfs, observer, dtype
+        )
         dtype = self.cmf_values.dtype
         self.xyz_sum = jnp.zeros((self.height, self.width, 3), dtype)
         self.weight_sum = jnp.zeros((self.height, self.width), dtype)
@@ -212,7 +219,7 @@ class Film(eqx.Module):
     @property
     def response(self) -> SpectralResponse:
         """The film's colour-matching functions as a `SpectralResponse`."""
-        return SpectralResponse(self.cmf_wavelengths_nm, self.cmf_values)
+        return SpectralResponse(self.cmf_wavelengths_nm, self.cmf_values, self.cmf_grid_nm)
 
 
 def film_samples_to_XYZ(
@@ -264,7 +271,11 @@ def film_samples_to_XYZ(
     p = jnp.broadcast_to(p.astype(dtype), L.shape)
     table_wl = film.cmf_wavelengths_nm.astype(dtype)
     table = film.cmf_values.astype(dtype)
-    cmf = interp_columns(wl, table_wl, table, left=0.0, right=0.0)
+    grid = film.cmf_grid_nm
+    if grid is None:
+        cmf = interp_columns(wl, table_wl, table, left=0.0, right=0.0)
+    else:  # evenly spaced (the CIE tables): the row without a search
+        cmf = interp_uniform_columns(wl, *grid, table, left=0.0, right=0.0)
     ok = p > 0
     inv_p = jnp.where(ok, 1.0 / jnp.where(ok, p, 1.0), 0.0)
     contrib = (L * inv_p)[..., None] * cmf  # (..., n_lambda, 3)

@@ -196,11 +196,15 @@ class _Config:
     spectral_bins: int = 0  # 0: an XYZ film only
 
 
-_ELEMENTWISE_PASSES = 16
+_UNROLLED_PASSES = 64
 """Up to this many passes per step, a step's filter footprints are summed over the passes as
-one fused elementwise loop rather than a `dot_general`: measured on XLA:CPU for 16384 pixels x
-4 passes, 0.28 ms against 8.5 ms (4096 x 16: 0.49 against 4.5 ms); at 64 passes the dot is
-faster (1.6 against 2.5 ms)."""
+an unrolled sum of elementwise products (one fused loop over the pixels with no reduction in
+it) rather than a `dot_general`. Measured on XLA:CPU (2 cores, 5 x 5 footprints, 4 channels)
+for pixels x passes 32768 x 2, 8192 x 8, 4096 x 16, 1024 x 64: 0.66, 0.66, 0.88, 0.74 ms
+against the dot's 9.2, 2.0, 1.5, 1.1 ms and a fused `jnp.sum` over the passes' axis's 13.1,
+7.8, 6.8, 6.2 ms (XLA:CPU's reduction loop inside a fusion does not vectorise; it took 11 %
+of a 128 x 128 render of the textured benchmark scene). Past 64 passes the program grows with
+the passes, and the dot is used."""
 
 
 def _footprint_radius(cfg: _Config, rfilter) -> int:
@@ -294,10 +298,10 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
         f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
         fy, fx = f1[..., 1], f1[..., 0]
-        if k <= _ELEMENTWISE_PASSES:  # one fused loop; XLA:CPU's dot is 10-30x slower here
-            footprints = jnp.sum(
-                fy[..., :, None, None] * fx[..., None, :, None] * values[..., None, None, :],
-                axis=1,
+        if k <= _UNROLLED_PASSES:  # one fused elementwise loop (`_UNROLLED_PASSES`)
+            footprints = sum(
+                fy[:, i, :, None, None] * fx[:, i, None, :, None] * values[:, i, None, None, :]
+                for i in range(k)
             )
         else:
             footprints = jnp.einsum("tkj,tki,tkc->tjic", fy, fx, values)
@@ -408,7 +412,8 @@ def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> F
         (x >= 0) & (x < width) & (y >= 0) & (y < height) & (pixel < width * height)[:, None, None]
     )
     idx = jnp.where(inside, y * width + x, width * height).reshape(-1)  # out of range: dropped
-    values = footprints.reshape(-1, footprints.shape[-1])
+    # Materialised once: fused into each slice below, XLA:CPU computed them once per slice.
+    values = jax.lax.optimization_barrier(footprints.reshape(-1, footprints.shape[-1]))
     xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(values[:, :3], mode="drop")
     weight_sum = film.weight_sum.reshape(-1).at[idx].add(values[:, 3], mode="drop")
     if film.spectral_sum is not None:
@@ -641,7 +646,7 @@ def render(
         for i in steps:
             group, tile = divmod(i, plan.n_tiles)
             # Host indices: no device program per step to make them.
-            pixel = np.arange(plan.tile, dtype=np.int32) + np.int32(tile * plan.tile)
+            pixel = _tile_order(plan.tile) + np.int32(tile * plan.tile)
             # No host callbacks in the step: it stays cacheable on disk (`_cache.py`).
             with checks_without_callbacks():
                 film = step(
@@ -762,6 +767,32 @@ def _layout(plan: _Plan, cfg: _Config) -> tuple[int, ...]:
     """The step layout a checkpoint's step count refers to."""
     recon = RECONSTRUCTIONS.index(cfg.reconstruction)
     return (plan.tile, plan.passes, plan.n_tiles, plan.n_groups, recon)
+
+
+@functools.lru_cache(maxsize=8)
+def _tile_order(tile: int) -> np.ndarray:
+    """The order of a tile's pixels `0 .. tile - 1` in a step's `pixel` array, which the
+    devices split into contiguous shares: interleaved, so that every device's share spreads
+    over the whole tile and the devices get equal work (contiguous shares gave one device the
+    sky and the other the floor of the textured benchmark scene: the first waited for the
+    second 32 % of a render's time).
+
+    The order is one permutation for every device count (so that the film's sums are added
+    in one order and the image is bit-identical across device counts): a tile of `128 R`
+    pixels is read as `R` rows of 128, and its `128 R` slots list column `rev(j)` of every
+    row for `j = 0, 1, ..., 127`, with `rev` the reversal of 7 bits. A contiguous share
+    `1 / n` of the slots (n a power of two up to 128) then holds the pixels of one residue
+    modulo n. Tiles that are not a multiple of 128 pixels keep their order."""
+    if tile % 128:
+        return np.arange(tile, dtype=np.int32)
+    j = np.arange(128)
+    rev = np.zeros(128, dtype=np.int64)
+    for bit in range(7):
+        rev |= ((j >> bit) & 1) << (6 - bit)
+    order = rev[:, None] + 128 * np.arange(tile // 128)[None, :]
+    order = order.ravel().astype(np.int32)
+    order.flags.writeable = False
+    return order
 
 
 def _paths_of_step(plan: _Plan, i: int, spp: int) -> int:

@@ -79,6 +79,27 @@ def test_xyz_matches_colour_science_for_a_smooth_spectrum():
     np.testing.assert_allclose(ours[0], ref, rtol=2e-6)
 
 
+def test_evenly_spaced_cmfs_are_looked_up_without_a_search():
+    """The 1 nm CIE table is found evenly spaced, and its direct row lookup gives the XYZ of
+    the searched lookup (a response without the grid); an uneven table keeps the search."""
+    film = cam.Film(1, 1)
+    assert film.cmf_grid_nm == (360.0, 1.0) and film.response.cmf_grid_nm == (360.0, 1.0)
+    searched = cam.SpectralResponse(film.cmf_wavelengths_nm, film.cmf_values)
+    assert searched.cmf_grid_nm is None
+    rng = np.random.default_rng(3)
+    wl = rng.uniform(350.0, 840.0, (64, 4))
+    wl[0] = [360.0, 361.0, 829.5, 830.0]
+    L, pdf = rng.random((64, 4)), rng.uniform(0.5, 2.0, (64, 4)) / 470.0
+    direct = cam.film_samples_to_XYZ(film.response, L, wl, pdf)
+    np.testing.assert_allclose(
+        direct, cam.film_samples_to_XYZ(searched, L, wl, pdf), rtol=1e-12, atol=1e-15
+    )
+    uneven = cam.Film(
+        1, 1, cmfs=(np.delete(film.cmf_wavelengths_nm, 5), np.delete(film.cmf_values, 5, 0))
+    )
+    assert uneven.cmf_grid_nm is None
+
+
 def test_film_add_accepts_flat_xy_and_raster_pixels_and_drops_outside():
     film = cam.Film(4, 3, cmfs=_flat())
     xyz = jnp.asarray([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [7.0, 8.0, 9.0], [1.0, 1.0, 1.0]])
