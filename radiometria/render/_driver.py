@@ -62,6 +62,7 @@ from .._warmstart import (
     Interrupts as _Interrupts,
     exported_caller,
     exported_step_caller,
+    tile_order,
     uses_lapack,
 )
 from .._xla import jit_options
@@ -646,7 +647,7 @@ def render(
         for i in steps:
             group, tile = divmod(i, plan.n_tiles)
             # Host indices: no device program per step to make them.
-            pixel = _tile_order(plan.tile) + np.int32(tile * plan.tile)
+            pixel = tile_order(plan.tile) + np.int32(tile * plan.tile)
             # No host callbacks in the step: it stays cacheable on disk (`_cache.py`).
             with checks_without_callbacks():
                 film = step(
@@ -767,32 +768,6 @@ def _layout(plan: _Plan, cfg: _Config) -> tuple[int, ...]:
     """The step layout a checkpoint's step count refers to."""
     recon = RECONSTRUCTIONS.index(cfg.reconstruction)
     return (plan.tile, plan.passes, plan.n_tiles, plan.n_groups, recon)
-
-
-@functools.lru_cache(maxsize=8)
-def _tile_order(tile: int) -> np.ndarray:
-    """The order of a tile's pixels `0 .. tile - 1` in a step's `pixel` array, which the
-    devices split into contiguous shares: interleaved, so that every device's share spreads
-    over the whole tile and the devices get equal work (contiguous shares gave one device the
-    sky and the other the floor of the textured benchmark scene: the first waited for the
-    second 32 % of a render's time).
-
-    The order is one permutation for every device count (so that the film's sums are added
-    in one order and the image is bit-identical across device counts): a tile of `128 R`
-    pixels is read as `R` rows of 128, and its `128 R` slots list column `rev(j)` of every
-    row for `j = 0, 1, ..., 127`, with `rev` the reversal of 7 bits. A contiguous share
-    `1 / n` of the slots (n a power of two up to 128) then holds the pixels of one residue
-    modulo n. Tiles that are not a multiple of 128 pixels keep their order."""
-    if tile % 128:
-        return np.arange(tile, dtype=np.int32)
-    j = np.arange(128)
-    rev = np.zeros(128, dtype=np.int64)
-    for bit in range(7):
-        rev |= ((j >> bit) & 1) << (6 - bit)
-    order = rev[:, None] + 128 * np.arange(tile // 128)[None, :]
-    order = order.ravel().astype(np.int32)
-    order.flags.writeable = False
-    return order
 
 
 def _paths_of_step(plan: _Plan, i: int, spp: int) -> int:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from radiometria._warmstart import tile_order
 from radiometria.camera import PinholeCamera
 from radiometria.render import Path as PathIntegrator, _driver, render
 
@@ -277,3 +278,16 @@ def test_a_loaded_scene_is_compiled_once_and_again_when_edited(monkeypatch):
     assert len(calls) == 3
     assert not np.array_equal(moved, first)
     _compile.clear_compiled_scenes()
+
+
+def test_tile_order_gives_each_device_an_interleaved_share():
+    """A step's pixels are one permutation of the tile for every device count; a contiguous
+    1/n of it (n = 1, 2, 4, ..., 128: one device's share) holds the pixels of one residue
+    modulo n, spread over the whole tile. Tiles not a multiple of 128 keep their order."""
+    order = tile_order(128 * 6)
+    np.testing.assert_array_equal(np.sort(order), np.arange(128 * 6))
+    for n in (1, 2, 4, 8, 16, 32, 64, 128):
+        for share in np.split(order, n):
+            assert len(np.unique(share % n)) == 1
+            assert share.min() < 128 and share.max() >= 128 * 5  # every row of the tile
+    np.testing.assert_array_equal(tile_order(200), np.arange(200))
