@@ -413,8 +413,7 @@ def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> F
         (x >= 0) & (x < width) & (y >= 0) & (y < height) & (pixel < width * height)[:, None, None]
     )
     idx = jnp.where(inside, y * width + x, width * height).reshape(-1)  # out of range: dropped
-    # Materialised once: fused into each slice below, XLA:CPU computed them once per slice.
-    values = jax.lax.optimization_barrier(footprints.reshape(-1, footprints.shape[-1]))
+    values = footprints.reshape(-1, footprints.shape[-1])
     xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(values[:, :3], mode="drop")
     weight_sum = film.weight_sum.reshape(-1).at[idx].add(values[:, 3], mode="drop")
     if film.spectral_sum is not None:
