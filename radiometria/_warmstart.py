@@ -534,27 +534,18 @@ def exported_step_caller(
 
 
 @functools.lru_cache(maxsize=8)
-def tile_order(tile: int) -> np.ndarray:
+def tile_order(tile: int, n_devices: int) -> np.ndarray:
     """The order of a tile's pixels `0 .. tile - 1` in a step's `pixel` array, which the
-    devices split into contiguous shares: interleaved, so that every device's share spreads
-    over the whole tile and the devices get equal work (contiguous shares gave one device the
-    sky and the other the floor of the textured benchmark scene: the first waited for the
-    second 32 % of a render's time).
-
-    The order is one permutation for every device count (so that the film's sums are added
-    in one order and the image is bit-identical across device counts): a tile of `128 R`
-    pixels is read as `R` rows of 128, and its `128 R` slots list column `rev(j)` of every
-    row for `j = 0, 1, ..., 127`, with `rev` the reversal of 7 bits. A contiguous share
-    `1 / n` of the slots (n a power of two up to 128) then holds the pixels of one residue
-    modulo n. Tiles that are not a multiple of 128 pixels keep their order."""
-    if tile % 128:
-        return np.arange(tile, dtype=np.int32)
-    j = np.arange(128)
-    rev = np.zeros(128, dtype=np.int64)
-    for bit in range(7):
-        rev |= ((j >> bit) & 1) << (6 - bit)
-    order = rev[:, None] + 128 * np.arange(tile // 128)[None, :]
-    order = order.ravel().astype(np.int32)
+    `n_devices` devices split into contiguous shares: device `d` gets pixels `d, d + n,
+    d + 2 n, ...` (increasing), so that every device's share spreads over the whole tile and
+    the devices get equal work (contiguous shares gave one device the sky and the other the
+    floor of the textured benchmark scene: the first waited for the second 32 % of a render's
+    time), and each share is one regular lattice, on which the step adds its samples'
+    filter footprints into the film with dense shifted adds (`render._driver._band`).
+    `tile` is a multiple of `n_devices`."""
+    if tile % n_devices:
+        raise ValueError(f"a tile of {tile} pixels does not split over {n_devices} devices.")
+    order = np.arange(tile, dtype=np.int32).reshape(tile // n_devices, n_devices).T.ravel()
     order.flags.writeable = False
     return order
 
@@ -647,7 +638,7 @@ def run_entry(
     with Interrupts() as signals:
         for i in range(n_steps):
             group, t = divmod(i, n_tiles)
-            pixel = tile_order(tile) + np.int32(t * tile)
+            pixel = tile_order(tile, len(devices)) + np.int32(t * tile)
             film = step(*film, *kernel, key_data, spp_arr, np.int32(group * passes), pixel)
             if i == 0:
                 mark("first step dispatched" + jax_activity.summary())

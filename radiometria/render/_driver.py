@@ -646,7 +646,7 @@ def render(
         for i in steps:
             group, tile = divmod(i, plan.n_tiles)
             # Host indices: no device program per step to make them.
-            pixel = tile_order(plan.tile) + np.int32(tile * plan.tile)
+            pixel = tile_order(plan.tile, len(devices)) + np.int32(tile * plan.tile)
             # No host callbacks in the step: it stays cacheable on disk (`_cache.py`).
             with checks_without_callbacks():
                 film = step(
@@ -885,22 +885,94 @@ def _step(film, kernel, key, spp, pass_start, pixel, *, cfg: _Config):
     `_step_program`).
 
     The paths are traced under `jax.shard_map` over a 1-D mesh of `cfg.devices`, each device
-    taking its share of the tile's pixels; their results are then added to the film (replicated
-    accumulators), which gathers them from the devices.
+    taking its share of the tile's pixels (`tile_order`); each device adds its pixels' filter
+    footprints into a band of the film around the tile (`_band`), the bands are summed over
+    the devices, and the sum is added to the film (replicated accumulators). Splatting
+    integrators (`PTracer`, `BDPT`) gather their splats and footprints from the devices and
+    scatter them into the film.
     """
     splats = _splats_only(kernel.integrator) or _bidirectional(kernel.integrator)
+    mesh = Mesh(np.asarray(cfg.devices), ("pixels",))
+    in_specs = (P(), P(), P(), P(), P("pixels"))
+    if not splats:  # each device's footprints as a band of the film, summed over the devices
+
+        def trace_band(kernel, key, spp, pass_start, pixel):
+            footprints = _trace(kernel, key, spp, pass_start, pixel, cfg=cfg)
+            return jax.lax.psum(_band(footprints, pixel, cfg), "pixels")
+
+        band = jax.shard_map(
+            trace_band, mesh=mesh, in_specs=in_specs, out_specs=P(), check_vma=False
+        )(kernel, key, spp, pass_start, pixel)
+        return _add_band(film, pixel[0], band, cfg, _footprint_radius(cfg, kernel.rfilter))
     trace = jax.shard_map(
         functools.partial(_trace, cfg=cfg),
-        mesh=Mesh(np.asarray(cfg.devices), ("pixels",)),
-        in_specs=(P(), P(), P(), P(), P("pixels")),
-        out_specs=(P("pixels"),) * 3 if splats else P("pixels"),
+        mesh=mesh,
+        in_specs=in_specs,
+        out_specs=(P("pixels"),) * 3,
         check_vma=False,
     )
-    footprints = trace(kernel, key, spp, pass_start, pixel)
-    if splats:  # the devices' splats in device order, then the per-pixel weights
-        footprints, raster, xyz = footprints
-        film = _add_splats(film, raster, xyz, kernel.rfilter, cfg.width, film.height)
+    # The devices' splats in device order, then the per-pixel weights.
+    footprints, raster, xyz = trace(kernel, key, spp, pass_start, pixel)
+    film = _add_splats(film, raster, xyz, kernel.rfilter, cfg.width, film.height)
     return _add_footprints(film, pixel, footprints, cfg.width, film.height)
+
+
+def _band_halo(cfg: _Config, radius: int) -> int:
+    """Film pixels a band reaches before (and after) its tile: `radius` rows and pixels."""
+    return radius * cfg.width + radius
+
+
+def _band(footprints, pixel, cfg: _Config):
+    """One device's `(t, F, F, C)` footprints as a band of the film, `(L, C)`: slot `q` is
+    the film's pixel `p0 - halo + q`, with `p0` the tile's first pixel and `halo =
+    _band_halo(cfg, R)` (F = 2R + 1).
+
+    The device's pixels are `p0 + d + n m` (`tile_order`: device `d` of `n`, m = 0 .. t - 1),
+    so the footprint entry `(j, i)` of every pixel lands at slot `n m + d + j W + i`: for each
+    of the F^2 offsets, one dense add into the band viewed as `(L / n, n, C)` (a column of n,
+    at a row offset the same for all pixels), instead of a scatter of `t F^2` entries (which
+    on XLA:CPU took more time than the footprints themselves). Entries that would wrap past a
+    row's end, and those of pixels past the image, are zero."""
+    t, f, _, c = footprints.shape
+    radius, n, w = (f - 1) // 2, len(cfg.devices), cfg.width
+    rows = -(-(cfg.tile + 2 * _band_halo(cfg, radius)) // n)
+    first = pixel[0]
+    d = first % cfg.tile  # the device's index: its first pixel is p0 + d
+    x = pixel % w
+    valid = pixel < cfg.n_pixels
+    band = jnp.zeros((rows, n, c), footprints.dtype)
+    for j in range(f):
+        for i in range(f):
+            inside = valid & (x + (i - radius) >= 0) & (x + (i - radius) < w)
+            plane = jnp.where(inside[:, None], footprints[:, j, i], 0.0)[:, None, :]
+            o = d + j * w + i
+            start = (o // n, o % n, jnp.zeros_like(o))
+            here = jax.lax.dynamic_slice(band, start, (t, 1, c))
+            band = jax.lax.dynamic_update_slice(band, here + plane, start)
+    return band.reshape(rows * n, c)
+
+
+def _add_band(film: Film, first, band, cfg: _Config, radius: int) -> Film:
+    """Add a step's band `(L, C)` (`_band`, summed over the devices; footprints of radius
+    `radius`) into the film's sums: slot `q` to pixel `first - halo + q`, slots outside the
+    image dropped."""
+    n_film = film.width * film.height
+    halo = _band_halo(cfg, radius)
+    idx = first - halo + jnp.arange(band.shape[0], dtype=jnp.int32)
+    idx = jnp.where((idx >= 0) & (idx < n_film), idx, n_film)  # out of range: dropped
+    xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(band[:, :3], mode="drop")
+    weight_sum = film.weight_sum.reshape(-1).at[idx].add(band[:, 3], mode="drop")
+    if film.spectral_sum is not None:
+        n_bins = film.spectral_sum.shape[-1]
+        spectral = film.spectral_sum.reshape(-1, n_bins).at[idx].add(band[:, 4:], mode="drop")
+        film = eqx.tree_at(
+            lambda f: f.spectral_sum, film, spectral.reshape(film.spectral_sum.shape)
+        )
+    return eqx.tree_at(
+        lambda f: (f.xyz_sum, f.weight_sum),
+        film,
+        (xyz_sum.reshape(film.xyz_sum.shape), weight_sum.reshape(film.weight_sum.shape)),
+    )
 
 
 def _exported_step(save, kernel: _Kernel, cfg: _Config, plan: _Plan, film: Film, key, xyz: bool):

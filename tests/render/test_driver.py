@@ -7,11 +7,13 @@ import textwrap
 import time
 from pathlib import Path
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from radiometria._warmstart import tile_order
-from radiometria.camera import PinholeCamera
+from radiometria.camera import Film, PinholeCamera
 from radiometria.render import Path as PathIntegrator, _driver, render
 
 from ._synthetic import lit_box_camera, lit_box_scene
@@ -281,13 +283,38 @@ def test_a_loaded_scene_is_compiled_once_and_again_when_edited(monkeypatch):
 
 
 def test_tile_order_gives_each_device_an_interleaved_share():
-    """A step's pixels are one permutation of the tile for every device count; a contiguous
-    1/n of it (n = 1, 2, 4, ..., 128: one device's share) holds the pixels of one residue
-    modulo n, spread over the whole tile. Tiles not a multiple of 128 keep their order."""
-    order = tile_order(128 * 6)
-    np.testing.assert_array_equal(np.sort(order), np.arange(128 * 6))
-    for n in (1, 2, 4, 8, 16, 32, 64, 128):
-        for share in np.split(order, n):
-            assert len(np.unique(share % n)) == 1
-            assert share.min() < 128 and share.max() >= 128 * 5  # every row of the tile
-    np.testing.assert_array_equal(tile_order(200), np.arange(200))
+    """A step's pixels split into n contiguous device shares; share d holds the pixels
+    d, d + n, d + 2n, ... of the tile (a regular lattice over the whole tile, which `_band`
+    relies on); a tile that n does not divide is refused."""
+    for n in (1, 2, 3, 4, 128):
+        order = tile_order(128 * 6, n)
+        np.testing.assert_array_equal(np.sort(order), np.arange(128 * 6))
+        for d, share in enumerate(np.split(order, n)):
+            np.testing.assert_array_equal(share, np.arange(d, 128 * 6, n))
+    with pytest.raises(ValueError, match="does not split over 3 devices"):
+        tile_order(128, 3)
+
+
+@pytest.mark.parametrize("n_devices", [1, 2, 4])
+@pytest.mark.parametrize(
+    ("width", "height", "tile", "start"), [(37, 29, 256, 256), (37, 29, 256, 1024), (16, 8, 128, 0)]
+)
+def test_band_adds_footprints_as_the_scatter_does(n_devices, width, height, tile, start):
+    """Each device's footprints as a band of the film (`_band`), summed over the devices and
+    added (`_add_band`), give the film the scatter of every footprint entry to its pixel
+    (`_add_footprints`, which splatting integrators use): borders, row ends, the image's last
+    tile (pixels past the image) and 1, 2 or 4 devices."""
+    rng = np.random.default_rng(n_devices + width)
+    n_pixels = width * height
+    cfg = _driver._Config(n_pixels, tile, 1, width, "splat", (None,) * n_devices, 1)
+    pixel = tile_order(tile, n_devices) + start
+    footprints = rng.random((tile, 5, 5, 5)).astype(np.float32)
+    film = Film(width, height, dtype=jnp.float32, spectral_bins=1)
+    film = jax.tree.map(lambda x: x + 1.0, film)  # accumulators already holding something
+    want = _driver._add_footprints(film, jnp.asarray(pixel), jnp.asarray(footprints), width, height)
+    shares = zip(np.split(pixel, n_devices), np.split(footprints, n_devices), strict=True)
+    band = sum(_driver._band(jnp.asarray(f), jnp.asarray(p), cfg) for p, f in shares)
+    got = _driver._add_band(film, int(pixel[0]), band, cfg, 2)
+    for a, b in ((got.xyz_sum, want.xyz_sum), (got.weight_sum, want.weight_sum),
+                 (got.spectral_sum, want.spectral_sum)):  # fmt: skip
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-5)
