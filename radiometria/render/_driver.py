@@ -413,7 +413,12 @@ def _add_footprints(film: Film, pixel, footprints, width: int, height: int) -> F
         (x >= 0) & (x < width) & (y >= 0) & (y < height) & (pixel < width * height)[:, None, None]
     )
     idx = jnp.where(inside, y * width + x, width * height).reshape(-1)  # out of range: dropped
-    values = footprints.reshape(-1, footprints.shape[-1])
+    return _scatter_into_film(film, idx, footprints.reshape(-1, footprints.shape[-1]))
+
+
+def _scatter_into_film(film: Film, idx, values) -> Film:
+    """Add `values` `(m, 4 + n)` (`[wX, wY, wZ, w]`, then a spectral film's n bins) to the
+    film's pixels `idx` `(m,)` (flat; indices past the image are dropped)."""
     xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(values[:, :3], mode="drop")
     weight_sum = film.weight_sum.reshape(-1).at[idx].add(values[:, 3], mode="drop")
     if film.spectral_sum is not None:
@@ -960,19 +965,7 @@ def _add_band(film: Film, first, band, cfg: _Config, radius: int) -> Film:
     halo = _band_halo(cfg, radius)
     idx = first - halo + jnp.arange(band.shape[0], dtype=jnp.int32)
     idx = jnp.where((idx >= 0) & (idx < n_film), idx, n_film)  # out of range: dropped
-    xyz_sum = film.xyz_sum.reshape(-1, 3).at[idx].add(band[:, :3], mode="drop")
-    weight_sum = film.weight_sum.reshape(-1).at[idx].add(band[:, 3], mode="drop")
-    if film.spectral_sum is not None:
-        n_bins = film.spectral_sum.shape[-1]
-        spectral = film.spectral_sum.reshape(-1, n_bins).at[idx].add(band[:, 4:], mode="drop")
-        film = eqx.tree_at(
-            lambda f: f.spectral_sum, film, spectral.reshape(film.spectral_sum.shape)
-        )
-    return eqx.tree_at(
-        lambda f: (f.xyz_sum, f.weight_sum),
-        film,
-        (xyz_sum.reshape(film.xyz_sum.shape), weight_sum.reshape(film.weight_sum.shape)),
-    )
+    return _scatter_into_film(film, idx, band)
 
 
 def _exported_step(save, kernel: _Kernel, cfg: _Config, plan: _Plan, film: Film, key, xyz: bool):
