@@ -24,16 +24,18 @@ renderer that samples wavelengths outside 360-830 nm gets a smooth extrapolation
 `RGBIlluminantSpectrum` is 0 outside 360-830 nm, because the illuminant table ends there
 (Mitsuba 3 returns 0 for every upsampled spectrum outside the range; its issue #1771).
 
-All three are `radiometry.AbstractSpectrum` Modules holding only arrays (nm coefficients,
-scales, the illuminant table): batches of colours are one object, and they pass through
-`jit`, `vmap` and `grad` (the lookup is differentiable in rgb).
+All three are `radiometry.AbstractSpectrum` Modules holding arrays (nm coefficients,
+scales, the illuminant table; and that table's spacing, a static field): batches of colours
+are one object, and they pass through `jit`, `vmap` and `grad` (the lookup is
+differentiable in rgb).
 """
 
+import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
-from .._math import interp_columns
+from .._math import interp_columns, interp_uniform_columns, uniform_grid
 from ..colorimetry import get_colourspace
 from ..radiometry import AbstractSpectrum
 from ._forward import forward_model
@@ -160,6 +162,7 @@ class RGBIlluminantSpectrum(AbstractSpectrum):
     scale: Float[Array, "*batch"]
     illuminant_wavelengths_nm: Float[Array, " n"]
     illuminant_values: Float[Array, " n"]
+    illuminant_grid_nm: tuple[float, float] | None = eqx.field(static=True)
 
     def __init__(self, lut: RGBToSpectrumLUT, rgb: ArrayLike, colourspace=None):
         name = lut.colourspace if colourspace is None else get_colourspace(colourspace).name
@@ -174,12 +177,21 @@ class RGBIlluminantSpectrum(AbstractSpectrum):
         dtype = self.coeffs.dtype
         self.illuminant_wavelengths_nm = jnp.asarray(model.wavelengths_nm, dtype)
         self.illuminant_values = jnp.asarray(model.illuminant, dtype)
+        self.illuminant_grid_nm = uniform_grid(model.wavelengths_nm)
 
     def illuminant(self, wavelength_nm: ArrayLike) -> Array:
         """The normalised illuminant at `wavelength_nm` [nm] (linear interpolation, 0 outside
         the table). [relative]"""
         wl = as_float_array(wavelength_nm, "wavelength_nm")
         dtype = common_float_dtype(wl, self.illuminant_values)
+        if self.illuminant_grid_nm is not None:  # evenly spaced: the row without a search
+            return interp_uniform_columns(
+                wl.astype(dtype),
+                *self.illuminant_grid_nm,
+                self.illuminant_values.astype(dtype),
+                left=0.0,
+                right=0.0,
+            )
         return interp_columns(
             wl.astype(dtype),
             self.illuminant_wavelengths_nm.astype(dtype),

@@ -89,3 +89,13 @@ def test_spectra_jit_vmap_grad(lut):
     np.testing.assert_allclose(
         np.asarray(jax.jit(jax.vmap(f))(rgb)), np.asarray(jax.vmap(f)(rgb)), rtol=1e-12
     )
+
+
+def test_illuminant_table_is_looked_up_by_its_even_spacing():
+    """The colour space's illuminant table (1 nm) is found evenly spaced, and its direct row
+    lookup equals NumPy's interpolation of the table (0 outside), at and between the rows."""
+    s = up.RGBIlluminantSpectrum(up.get_lut(), jnp.asarray([0.2, 0.5, 0.9]))
+    assert s.illuminant_grid_nm == (360.0, 1.0)
+    wl = np.concatenate([np.linspace(350.0, 840.0, 977), [360.0, 830.0, 555.0]])
+    want = np.interp(wl, s.illuminant_wavelengths_nm, s.illuminant_values, left=0.0, right=0.0)
+    np.testing.assert_allclose(np.asarray(s.illuminant(wl)), want, rtol=1e-12, atol=1e-15)
