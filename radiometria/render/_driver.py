@@ -163,7 +163,8 @@ class _Plan:
 def _plan(n_pixels: int, spp: int, batch: int, n_devices: int) -> _Plan:
     """Tiles of pixels x passes per step for `spp` samples of `n_pixels` pixels."""
     # Tiles are multiples of 128 pixels where possible (so 1, 2, 4, ..., 128 devices share
-    # one layout and render bit-identical images), and of the device count in any case.
+    # one layout: the same steps of the same pixels and passes, images equal to float
+    # rounding), and of the device count in any case.
     quantum = math.lcm(128, n_devices) if n_pixels >= 128 else n_devices
     tile = min(batch, n_pixels)
     tile = max(quantum, -(-tile // quantum) * quantum)
