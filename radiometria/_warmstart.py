@@ -538,10 +538,11 @@ def tile_order(tile: int, n_devices: int) -> np.ndarray:
     """The order of a tile's pixels `0 .. tile - 1` in a step's `pixel` array, which the
     `n_devices` devices split into contiguous shares: device `d` gets pixels `d, d + n,
     d + 2 n, ...` (increasing), so that every device's share spreads over the whole tile and
-    the devices get equal work (contiguous shares gave one device the sky and the other the
-    floor of the textured benchmark scene: the first waited for the second 32 % of a render's
-    time), and each share is one regular lattice, on which the step adds its samples'
-    filter footprints into the film with dense shifted adds (`render._driver._band`).
+    the devices get equal work (with contiguous shares one device got the sky and the other
+    the floor of the textured benchmark scene, and in a profile the first waited at the
+    film's reduction for a third of the render), and each share is one regular lattice, on
+    which the step adds its samples' filter footprints into the film with dense shifted adds
+    (`render._driver._band`).
     `tile` is a multiple of `n_devices`."""
     if tile % n_devices:
         raise ValueError(f"a tile of {tile} pixels does not split over {n_devices} devices.")
