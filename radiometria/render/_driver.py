@@ -204,9 +204,9 @@ an unrolled sum of elementwise products (one fused loop over the pixels with no 
 it) rather than a `dot_general`. Measured on XLA:CPU (2 cores, 5 x 5 footprints, 4 channels)
 for pixels x passes 32768 x 2, 8192 x 8, 4096 x 16, 1024 x 64: 0.66, 0.66, 0.88, 0.74 ms
 against the dot's 9.2, 2.0, 1.5, 1.1 ms and a fused `jnp.sum` over the passes' axis's 13.1,
-7.8, 6.8, 6.2 ms (XLA:CPU's reduction loop inside a fusion does not vectorise; it took 11 %
-of a 128 x 128 render of the textured benchmark scene). Past 64 passes the program grows with
-the passes, and the dot is used."""
+7.8, 6.8, 6.2 ms (XLA:CPU's reduction loop inside a fusion does not vectorise; in a profile
+of a 128 x 128 render of the textured benchmark scene it held 11 % of the time). Past 64
+passes the program grows with the passes, and the dot is used."""
 
 
 def _footprint_radius(cfg: _Config, rfilter) -> int:
