@@ -1,4 +1,5 @@
-"""Diffuse area lights on triangles (Mitsuba's `area` emitter), sampled by power and area."""
+"""Diffuse area lights on triangles (Mitsuba's `area` emitter), sampled by emitter (its
+estimated contribution at the shading point), then by power and area."""
 
 from typing import ClassVar
 
@@ -26,6 +27,7 @@ from .._textures import (
     texture_parameter,
 )
 from ._base import AbstractLight, EmissionSample, LightSample
+from ._selection import MAX_SPATIAL_EMITTERS, EmitterBounds
 
 
 def _mean_radiance(radiance: AbstractTexture, n_uv: int = 64) -> np.ndarray:
@@ -51,8 +53,15 @@ class AreaLight(AbstractLight):
     the front side (the side of the winding normal) or on both.
 
     Next-event estimation picks an emissive triangle with probability proportional to its
-    area times its mean emitted radiance over the 1 nm grid, then a point uniformly on it;
-    the density per unit solid angle is $p_A\,d^2/|\cos\theta_l|$.
+    area times its mean emitted radiance over the 1 nm grid (its power), then a point
+    uniformly on it; the density per unit solid angle is $p_A\,d^2/|\cos\theta_l|$. With 2
+    to `MAX_SPATIAL_EMITTERS` emitters (shapes), it first picks an emitter by its estimated
+    contribution at the shading point (`selection`, an `EmitterBounds`: distance, the side
+    it emits on, the solid angle it can subtend) and then one of its triangles by power, so
+    the densities of a triangle are its power-based ones times $P_e(\mathbf p)/P_e$. On
+    `bench_media.py`'s scenes (two emitters) that lowered the relative MSE at equal samples
+    from 4.99e-2 to 4.07e-2. Emitted rays (`sample_le`, light tracing) are still picked by
+    power.
 
     **Spheres.** An emitter whose triangles tessellate a `sphere` (`emitter_sphere`, with a
     constant radiance) is sampled, from a shading point outside it, by the cone of directions
@@ -91,6 +100,8 @@ class AreaLight(AbstractLight):
     - `sphere_center`, `sphere_radius`, `sphere_prob`: `(e, 3)`, `(e,)`, `(e,)` the true
         sphere of each emitter sampled by its cone (radius 0: none) and the summed selection
         probability $P_e$ of its triangles; `None` when no emitter is. [scene units]
+    - `selection`: the emitters' `EmitterBounds`, or `None` (one emitter, or more than
+        `MAX_SPATIAL_EMITTERS`: by power).
     - `phi`: emitted power, $\pi \sum_i A_i \bar L_i$ (twice that for two-sided emitters),
         with $\bar L_i$ the radiance averaged over the 1 nm grid (static, for `LightSet`).
         [W nm^-1]
@@ -99,7 +110,8 @@ class AreaLight(AbstractLight):
         Chapter 8 (emitters); eq. 1.13-1.14 (radiance and solid angle).
 
     ??? cite "References"
-        `Pharr2023` §12.2 (sampling area lights by power and area), §12.5 (light sampling);
+        `Pharr2023` §12.2 (sampling area lights by power and area), §12.5 (light sampling),
+        §12.6.3 (light bounds and their importance);
         `Jakob2022` (Mitsuba's `area` emitter).
     """
 
@@ -124,6 +136,7 @@ class AreaLight(AbstractLight):
     analytic_center: Float[Array, "e 3"] | None = None
     analytic_radius: Float[Array, " e"] | None = None
     analytic_to_local: Float[Array, "e 3 3"] | None = None
+    selection: EmitterBounds | None = None
     phi: float = eqx.field(static=True, default=0.0)
 
     @classmethod
@@ -180,7 +193,9 @@ class AreaLight(AbstractLight):
         # Next-event estimation picks an emissive triangle with probability proportional to
         # area x (mean emitted radiance over the grid), then a point uniformly on it.
         emissive = np.flatnonzero((face_emitter >= 0) & (area > 0))
+        emissive = emissive[np.argsort(face_emitter[emissive], kind="stable")]  # by emitter
         phi = 0.0
+        mean_le = None
         if emissive.size:
             mean_le = _mean_radiance(radiance)
             power = area[emissive] * mean_le[face_emitter[emissive]]
@@ -221,6 +236,25 @@ class AreaLight(AbstractLight):
                 "analytic_to_local": jnp.asarray(to_local, dtype),
             }
         lf = jnp.asarray(light_face, jnp.int32)
+        selection = None
+        if emissive.size and 2 <= np.unique(face_emitter[emissive]).size <= MAX_SPATIAL_EMITTERS:
+            corners = np.asarray(p0, np.float64)[emissive][:, None] + np.stack(
+                [np.zeros((emissive.size, 3)), np.asarray(e1, np.float64)[emissive],
+                 np.asarray(e2, np.float64)[emissive]], axis=1)  # fmt: skip
+            sph = None
+            if emitter_true_sphere is not None or emitter_sphere is not None:
+                sph = [
+                    (t if t is not None else s)
+                    for t, s in zip(
+                        emitter_true_sphere or [None] * n_em,
+                        emitter_sphere or [None] * n_em,
+                        strict=True,
+                    )
+                ]
+            selection = EmitterBounds.from_triangles(
+                corners, np.asarray(normal, np.float64)[emissive], area[emissive],
+                face_emitter[emissive], prob, mean_le, two_sided, sph, dtype=dtype,
+            )  # fmt: skip
         uv = {}
         if face_uv is not None and not isinstance(radiance, ConstantTexture):
             c = jnp.asarray(face_uv, dtype)[lf]
@@ -259,6 +293,7 @@ class AreaLight(AbstractLight):
             e1=e1[lf],
             e2=e2[lf],
             normal=normal[lf],
+            selection=selection,
             phi=phi,
             **uv,
             **spheres,
@@ -291,11 +326,16 @@ class AreaLight(AbstractLight):
         pdf_area = self.light_pdf_area[face]
         ok = (cos_light > 0) & (pdf_area > 0)
         pdf = jnp.where(ok, pdf_area * dist * dist / jnp.where(ok, cos_light, 1.0), 0.0)
-        if self.sphere_radius is None or origin is None:
+        if origin is None:
             return pdf
-        e = jnp.maximum(self.face_emitter[face], 0)
-        cone, pdf_cone, _ = self._cone(e, origin)
-        return jnp.where(cone & (self.face_emitter[face] >= 0), jnp.where(ok, pdf_cone, 0.0), pdf)
+        if self.sphere_radius is not None:
+            e = jnp.maximum(self.face_emitter[face], 0)
+            cone, pdf_cone, _ = self._cone(e, origin)
+            pdf = jnp.where(cone & (self.face_emitter[face] >= 0), jnp.where(ok, pdf_cone, 0.0),
+                            pdf)  # fmt: skip
+        if self.selection is not None:
+            pdf = pdf * self.selection.factor(self.face_emitter[face], origin)
+        return pdf
 
     def _cone(self, e, p):
         r"""Whether emitter `e`'s light samples from `p` are drawn from its sphere's cone, the
@@ -358,10 +398,14 @@ class AreaLight(AbstractLight):
 
     def sample_li(self, p, u_select, u2, wavelength_nm) -> LightSample:
         dtype = p.dtype
-        # (a comparison against every entry is cheaper than a binary-search loop for a few)
-        method = "compare_all" if self.light_cdf.shape[0] <= 64 else "scan_unrolled"
-        j = jnp.searchsorted(self.light_cdf, u_select, side="right", method=method)
-        j = jnp.clip(j, 0, self.light_face.shape[0] - 1)
+        if self.selection is not None:  # an emitter by its estimate at p, then by power
+            j, factor = self.selection.pick(p, u_select, self.light_cdf)
+        else:
+            # (a comparison against every entry is cheaper than a binary-search loop for a few)
+            method = "compare_all" if self.light_cdf.shape[0] <= 64 else "scan_unrolled"
+            j = jnp.searchsorted(self.light_cdf, u_select, side="right", method=method)
+            j = jnp.clip(j, 0, self.light_face.shape[0] - 1)
+            factor = None
         lf = self.light_face[j]
         e = jnp.maximum(self.face_emitter[lf], 0)
         y, n_y, uv = self._point(j, e, u2, dtype)
@@ -382,6 +426,8 @@ class AreaLight(AbstractLight):
             wi = jnp.where(cone[:, None], w_c, wi)
             dist = jnp.where(cone, d_c, dist)
             pdf = jnp.where(cone, pdf_cone, pdf)
+        if factor is not None:
+            pdf = pdf * factor
         return LightSample(wi=wi, dist=dist, radiance=le, pdf=pdf)
 
     def sample_le(self, u_select, u_pos, u_dir, u_side, observer, wavelength_nm):

@@ -26,7 +26,8 @@ class LightSet(AbstractLight):
     Next-event estimation picks plugin $j$ with probability $P_j = \Phi_j / \sum_i \Phi_i$,
     proportional to its power (`AbstractLight.power`; lights at infinity and directional
     lights count the power falling on a disk of the scene's radius, as in pbrt), re-uses the
-    selection variate within the chosen plugin (which picks one of its lights by power in
+    selection variate within the chosen plugin (which picks one of its lights by power, or
+    area emitters by their estimated contribution at the shading point, in
     turn), and multiplies the sample's density by $P_j$. The densities the integrator weighs
     BSDF samples against are therefore $P_\mathrm{area}\,p_\mathrm{area}$ for a hit on an
     emissive triangle (`pdf_li`) and $P_\mathrm{env}\,p_\mathrm{env}$ for a ray that escapes
