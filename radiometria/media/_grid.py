@@ -55,17 +55,24 @@ where given); the tracking steps draw theirs (the optical depth to the next coll
 the real-or-null or roulette decision) from the hash `pcg4d` of those variates and the
 step number (`Jarzynski2020`), so the same `u` gives the same result.
 
-**Loop.** The walks run in one `lax.while_loop` until every path has left its segment (no step
+**Loop.** The walks run in `lax.while_loop`s until every path has left its segment (no step
 cap biases them). Each path crosses its cells on its own and waits at its tentative collisions;
 an iteration either moves every path that is not waiting by one cell (or to its collision in
 that cell) or, once half of the active paths wait (or all of them), evaluates their collisions
-together (a density lookup, dearer than a cell crossing). Nesting a loop over the cells inside
-a loop over the collisions, as before, made every path wait for the longest search of each
-collision. Each path draws the same variates and does the same arithmetic as before, so the
-estimates are the same; `bench_media.py`'s heterogeneous scene (128 x 128, 16 spp, chunks of
-256 paths, two CPU devices, warm) took 1.09-1.13 s against 1.13-1.17 s, and 1.21 s against
-1.39 s with chunks of 1024 paths. With the command line's XLA flags
-(`radiometria.cli.cpu_xla_flags`) XLA:CPU compiles these loops into single functions: 0.69 s.
+together (a density lookup, dearer than a cell crossing). Walks differ much in length, and an
+iteration costs every lane of the loop, so once at most an eighth of the lanes' paths are
+still walking, those are gathered into an eighth as many lanes and a new loop goes on with
+them, down to 32 lanes (`_staged_loop`: a chunk of 2048 paths walks in loops of 2048, 256 and
+32 lanes). Each path does the same steps with the same variates whatever the grouping, so the
+estimates are the same. On random walks through `bench_media.py`'s grid, lanes in one loop of
+256 were busy 26 % (free flights) and 31 % (transmittances) of the iterations; loops of 2048,
+256 and 32 lanes do 1.9x and 1.6x fewer lane-iterations than loops of 256, and halving
+stages down to 16 lanes 3.2x and 2.3x, but each loop size is compiled anew (7 sizes: about
+20 s more compile time for a scene's first render; 3 sizes: about 5 s). `bench_media.py`'s
+heterogeneous scene (256 x 256, 16 spp, two CPU devices, warm, alternating runs) took
+4.2-4.8 s against 5.9-7.2 s with one loop per walk in chunks of 256 paths, the same image.
+With the command line's XLA flags (`radiometria.cli.cpu_xla_flags`) XLA:CPU compiles each of
+these loops into a single function.
 """
 
 import equinox as eqx
@@ -266,6 +273,60 @@ class _Track(eqx.Module):
     weight: Array  # (n, k)
 
 
+class _Ray(eqx.Module):
+    """What each path's walk keeps fixed (`GridMedium._walk`), in the scene (`o`, `d`) and
+    the grid's local frame (`o_l`, `w_l`, `safe_w`: `w_l` with zeros replaced by 1)."""
+
+    o: Array  # (n, 3)
+    d: Array  # (n, 3)
+    o_l: Array  # (n, 3)
+    w_l: Array  # (n, 3)
+    safe_w: Array  # (n, 3)
+    stop: Array  # (n,) where the walk ends [scene units]
+    u: Array  # (n, d) the variates
+    s: Array  # (n, k) extinction spectrum
+    r: Array  # (n, k) albedo spectrum
+    s_max: Array  # (n,)
+
+
+_STAGE_FACTOR = 8  # `_staged_loop`: lanes shrink by this factor per stage ...
+_STAGE_MIN = 32  # ... down to this many
+
+
+def _staged_loop(body, ray: _Ray, track: _Track) -> _Track:
+    """Run `body(ray, track)` until no path is active, compacting the active paths into
+    fewer lanes as they finish (module docstring, "Loop").
+
+    A loop over `n` lanes runs until its longest walk ends, every iteration costing all `n`
+    lanes. Here the loop stops once at most `n / _STAGE_FACTOR` paths are active; those are
+    gathered into that many lanes (`jnp.nonzero` with a static size), the next loop goes on
+    with them, down to `_STAGE_MIN` lanes, and the results are scattered back. Each path
+    does the same steps with the same variates in either case (only when a group's tentative
+    collisions are evaluated differs), so the estimates are the same. The gathers and
+    scatters sit between the loops, which stay free of scatters and custom calls, so
+    XLA:CPU still compiles each loop into one function (`radiometria.cli.cpu_xla_flags`)."""
+    n = track.active.shape[0]
+    size = n // _STAGE_FACTOR
+    floor = size if size >= _STAGE_MIN else 0
+
+    def cond(c):
+        a = jnp.sum(c.active, dtype=jnp.int32)
+        return (a > floor) & (a > 0)
+
+    track = lax.while_loop(cond, lambda c: body(ray, c), track)
+    if floor == 0:
+        return track
+    (idx,) = jnp.nonzero(track.active, size=size, fill_value=n)
+
+    def take(x):
+        return jnp.take(x, idx, axis=0, mode="clip")
+
+    sub = jax.tree.map(take, track)
+    sub = eqx.tree_at(lambda c: c.active, sub, sub.active & (idx < n))
+    sub = _staged_loop(body, jax.tree.map(take, ray), sub)
+    return jax.tree.map(lambda a, b: a.at[idx].set(b, mode="drop"), track, sub)
+
+
 class GridMedium(AbstractMedium):
     r"""A heterogeneous medium: density and albedo grids in a box placed by `to_world`
     (module docstring), at a batch of paths' wavelengths.
@@ -398,6 +459,10 @@ class GridMedium(AbstractMedium):
         """`(sigma_t, sigma_s)` `(n, k)` at scene points `(n, 3)` [scene units] and the
         wavelengths [nm]. [scene units^-1]"""
         s, r = self._spectra(wavelength_nm)
+        return self._coefficients(points, s, r)
+
+    def _coefficients(self, points, s, r):
+        """`coefficients_at` with the spectra `s`, `r` `(n, k)` already at the wavelengths."""
         p = _affine(self.to_local.astype(points.dtype), points)
         d = trilinear_lookup(self.density, p)
         a = 1.0 if self.albedo_grid is None else trilinear_lookup(self.albedo_grid, p)[:, None]
@@ -424,7 +489,7 @@ class GridMedium(AbstractMedium):
         d = jnp.asarray(t_max, dtype)
         start = jnp.maximum(t0, 0.0)
         stop = jnp.minimum(t1, d)
-        s, _ = self._spectra(lam)
+        s, r = self._spectra(lam)
         s_max = jnp.max(s, axis=-1)
         hi_g = self.majorant_grid.astype(dtype)
         lo_g = self.minorant_grid.astype(dtype)
@@ -435,7 +500,6 @@ class GridMedium(AbstractMedium):
         res_zyx = self.majorant_grid.shape
         res = jnp.asarray(res_zyx[::-1], dtype)[None, :]  # (1, 3): Rx, Ry, Rz
         top = jnp.asarray(res_zyx[::-1], jnp.int32)[None, :] - 1
-        fwd = w_l > 0
         safe_w = jnp.where(w_l != 0, w_l, 1.0)
         active0 = (stop > start) & (s_max > 0) & (jnp.max(hi_g) > 0)
         p0 = o_l + jnp.where(active0, start, 0.0)[:, None] * w_l
@@ -444,20 +508,18 @@ class GridMedium(AbstractMedium):
         def cell_value(g, cell):
             return g[cell[:, 2], cell[:, 1], cell[:, 0]]
 
-        def draw(step):
+        def draw(u, step):
             """Optical depth to the next tentative collision and the variate deciding it."""
             v = _uniforms(u, step, 2)
             return -jnp.log1p(-v[:, 0]), v[:, 1]
 
-        def cond(c):
-            return jnp.any(c.active)
-
-        def advance(c: _Track) -> _Track:
+        def advance(ray: _Ray, c: _Track) -> _Track:
             """One DDA step (`Amanatides1987`) of every active path not waiting at a
             collision: to its tentative collision if the optical depth `tau` left runs out in
             its cell (it then waits there), else into the next cell."""
+            o_l, w_l, fwd, safe_w, stop = ray.o_l, ray.w_l, ray.w_l > 0, ray.safe_w, ray.stop
             moving = c.active & ~c.waiting
-            mu = cell_value(rate_g, c.cell) * s_max
+            mu = cell_value(rate_g, c.cell) * ray.s_max
             bound = (c.cell + fwd.astype(jnp.int32)).astype(dtype) / res
             t_ax = jnp.where(w_l != 0, (bound - o_l) / safe_w, jnp.inf)
             axis = jnp.argmin(t_ax, axis=-1)
@@ -486,14 +548,15 @@ class GridMedium(AbstractMedium):
                 ),
             )
 
-        def collide(c: _Track) -> _Track:
+        def collide(ray: _Ray, c: _Track) -> _Track:
             """The tentative collisions of the waiting paths: the density where they are,
             the estimator's weight, and the optical depth to the next one."""
             hit = c.waiting
-            mu = cell_value(rate_g, c.cell) * s_max
+            s = ray.s
+            mu = cell_value(rate_g, c.cell) * ray.s_max
             mu_s = jnp.where(mu > 0, mu, 1.0)
-            x = origins + jnp.where(hit, c.t, 0.0)[:, None] * directions
-            st, ss = self.coefficients_at(x, lam)
+            x = ray.o + jnp.where(hit, c.t, 0.0)[:, None] * ray.d
+            st, ss = self._coefficients(x, s, ray.r)
             weight, scattered = c.weight, c.scattered
             if mode == "ratio":
                 sc = cell_value(ctrl_g, c.cell)[:, None] * s
@@ -515,7 +578,7 @@ class GridMedium(AbstractMedium):
                 weight = jnp.where(hit[:, None], weight * factor, weight)
                 scattered = scattered | stopped
             step = c.step + hit.astype(jnp.uint32)
-            tau_next, v_next = draw(step)
+            tau_next, v_next = draw(ray.u, step)
             return eqx.tree_at(
                 lambda c: (c.tau, c.v, c.step, c.active, c.waiting, c.scattered, c.weight),
                 c,
@@ -530,15 +593,15 @@ class GridMedium(AbstractMedium):
                 ),
             )
 
-        def body(c: _Track) -> _Track:
+        def body(ray: _Ray, c: _Track) -> _Track:
             # Paths advance cell by cell independently and wait at their tentative collisions;
             # the collisions are evaluated together (a density lookup is dear) once half of
             # the active paths wait, or all of them.
             n_waiting = jnp.sum(c.waiting, dtype=jnp.int32)
             n_active = jnp.sum(c.active, dtype=jnp.int32)
-            return lax.cond(2 * n_waiting >= n_active, collide, advance, c)
+            return lax.cond(2 * n_waiting >= n_active, collide, advance, ray, c)
 
-        tau0, v0 = draw(jnp.zeros((n,), jnp.uint32))
+        tau0, v0 = draw(u, jnp.zeros((n,), jnp.uint32))
         init = _Track(
             t=jnp.where(active0, start, 0.0),
             cell=cell0,
@@ -551,7 +614,9 @@ class GridMedium(AbstractMedium):
             scattered=jnp.zeros((n,), bool),
             weight=jnp.ones((n, k), dtype),
         )
-        out = lax.while_loop(cond, body, init)
+        ray = _Ray(o=origins, d=directions, o_l=o_l, w_l=w_l, safe_w=safe_w, stop=stop, u=u,
+                   s=s, r=r, s_max=s_max)  # fmt: skip
+        out = _staged_loop(body, ray, init)
         t, scattered, weight, ctrl = out.t, out.scattered, out.weight, out.ctrl
         if mode == "ratio":
             weight = weight * jnp.exp(-s * ctrl[:, None])

@@ -171,3 +171,30 @@ def test_a_constant_grid_is_the_homogeneous_medium():
     o_in = jnp.asarray(np.asarray(oo) + t0[:, None] * np.asarray(ww))
     tr_h = np.asarray(homo.transmittance(o_in, ww, jnp.asarray(length), lam, u))
     assert np.allclose(tr, tr_h, rtol=1e-10)
+
+
+def test_compacting_the_walks_into_fewer_lanes_changes_no_estimate(monkeypatch):
+    """The tracking loops gather the walks still going into half as many lanes as others
+    end (`_grid._staged_loop`); every path's estimate equals, to the bit, what one loop over
+    all the lanes gives, for free flights and transmittances."""
+    from radiometria.media import _grid
+
+    grid = _blob()
+    s = np.array([0.3, 0.8])
+    _, _, _, oo, ww, tt = _rays(300)
+    n = oo.shape[0]
+    lam = jnp.tile(jnp.asarray([500.0, 600.0]), (n, 1))
+    u = jax.random.uniform(jax.random.key(3), (n, 2), jnp.float64)
+    med = _medium(grid, s, np.array([0.9, 0.6]))
+
+    def estimates():
+        mi = med.sample_free_flight(oo, ww, tt, lam, u)
+        tr = med.transmittance(oo, ww, tt, lam, u)
+        return [np.asarray(x) for x in (mi.t, mi.scattered, mi.weight, tr)]
+
+    staged = estimates()
+    monkeypatch.setattr(_grid, "_STAGE_MIN", 10**9)  # one loop over all lanes
+    single = estimates()
+    for a, b in zip(staged, single, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert staged[1].any() and not staged[1].all()

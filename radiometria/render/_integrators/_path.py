@@ -361,15 +361,15 @@ def path_radiance(
     return jnp.where(state.hero_only[:, None], state.radiance[:, :1] * hero, state.radiance)
 
 
-def _default_chunk(n_rays: int, divergent: bool = False) -> int:
+def _default_chunk(n_rays: int) -> int:
     """Paths per compacted chunk: 2048 on CPUs (the chunk's (paths, triangles) temporaries of
     brute-force intersection stay in cache: measured twice as fast as 8192), a quarter of the
-    batch (at least 65536) on accelerators. `divergent`: the paths run loops of very
-    different lengths (tracking through grid media), where every path of a chunk waits for
-    its longest: 256 on CPUs (a heterogeneous medium scene, 64 x 64 at 64 spp: 2.16 s with
-    2048, 1.50 s with 256 or 128, 3.1 s with 8192)."""
+    batch (at least 65536) on accelerators. Grid media need no smaller chunks: their tracking
+    loops compact the walks still going into fewer lanes as others end
+    (`radiometria.media._grid._staged_loop`); before that, chunks of 256 paths were used
+    there, each waiting for its longest walk."""
     if jax.default_backend() == "cpu":
-        return min(n_rays, 256 if divergent else 2048)
+        return min(n_rays, 2048)
     return min(n_rays, max(65536, -(-n_rays // 4)))
 
 

@@ -627,10 +627,7 @@ def volpath_radiance(
             max_null=max_null, differentiable=not compact, spectral_mis=spectral_mis,
         )  # fmt: skip
 
-    if chunk is None:
-        tracked = scene.media is not None and any(p.TRACKED for p in scene.media.plugins)
-        chunk = _default_chunk(n_rays, divergent=tracked)
-    chunk = min(int(chunk), n_rays)
+    chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)
     state = run_segments(
         state, segment, wavelength_nm, n_segments=max_depth, chunk=chunk, compact=compact
     )

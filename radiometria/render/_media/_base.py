@@ -24,9 +24,6 @@ class AbstractMediumPlugin(eqx.Module):
         different media of this kind at once.
     - `CONCATENABLE`: whether plugins of this kind can be merged into one (rows of equal
         shape; a grid medium's grids generally differ, so each keeps its own plugin).
-    - `TRACKED`: whether free flights and transmittances run tracking loops whose length
-        differs from path to path (grids); the integrators then trace smaller groups of
-        paths in lockstep on CPUs (`_path._default_chunk`).
 
     !!! note "Thesis"
         Chapter 4 (energy transport in a medium) and chapter 9 (volume rendering); titles only
@@ -38,7 +35,6 @@ class AbstractMediumPlugin(eqx.Module):
 
     NAME: ClassVar[str]
     CONCATENABLE: ClassVar[bool] = True
-    TRACKED: ClassVar[bool] = False
 
     @property
     @abc.abstractmethod

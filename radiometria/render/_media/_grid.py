@@ -106,7 +106,6 @@ class GridMediumPlugin(AbstractMediumPlugin):
 
     NAME: ClassVar[str] = "heterogeneous"
     CONCATENABLE: ClassVar[bool] = False
-    TRACKED: ClassVar[bool] = True
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"sigma_t", "albedo", "scale", "g"})
     density: Float[Array, "z y x"]
     sigma_t: SpectrumTable
