@@ -1,5 +1,7 @@
 """Private vectorised math helpers of the colour-difference path agree with jnp / NumPy."""
 
+from fractions import Fraction
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -8,9 +10,18 @@ from jax.test_util import check_grads
 from radiometria.colorimetry._fastmath import atan2_degrees, cbrt_positive, sin_small
 
 
-def test_cbrt_positive_float64_and_float32():
+def test_cbrt_positive_float64_within_one_ulp_exactly():
+    # Exact rational arithmetic: the true root lies strictly between y - ulp and y + ulp.
+    # (NumPy's / glibc's cbrt is itself up to 3 ulp off, so it cannot be the reference.)
     t = np.geomspace(1e-300, 1e300, 20001)
-    np.testing.assert_allclose(cbrt_positive(jnp.asarray(t)), np.cbrt(t), rtol=5e-16)
+    y = np.asarray(cbrt_positive(jnp.asarray(t)))
+    ulp = np.spacing(y)
+    for ti, yi, ui in zip(t.tolist(), y.tolist(), ulp.tolist(), strict=True):
+        lo, hi = Fraction(yi) - Fraction(ui), Fraction(yi) + Fraction(ui)
+        assert lo**3 < Fraction(ti) < hi**3, ti
+
+
+def test_cbrt_positive_float32():
     t32 = np.geomspace(1e-37, 1e37, 20001).astype(np.float32)
     out = cbrt_positive(jnp.asarray(t32))
     assert out.dtype == jnp.float32
