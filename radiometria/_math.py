@@ -17,6 +17,7 @@ __all__ = [
     "align_ranks",
     "dot",
     "interp_columns",
+    "interp_table",
     "interp_uniform_columns",
     "interpolation_weights",
     "safe_div",
@@ -153,3 +154,19 @@ def interp_uniform_columns(
     lead = (None,) * x.ndim
     f = jnp.where(below, fp[0][lead] if left is None else left, f)
     return jnp.where(above, fp[-1][lead] if right is None else right, f)
+
+
+def interp_table(
+    x: ArrayLike,
+    xp: ArrayLike,
+    fp: ArrayLike,
+    grid: tuple[float, float] | None,
+    left=None,
+    right=None,
+) -> Array:
+    """`interp_columns(x, xp, fp)`, through `interp_uniform_columns` (no search) when `grid`
+    is the knots' `(start, step)` from `uniform_grid(xp)`, computed once where the table is
+    made; `grid = None` searches `xp`."""
+    if grid is None:
+        return interp_columns(x, xp, fp, left=left, right=right)
+    return interp_uniform_columns(x, *grid, fp, left=left, right=right)

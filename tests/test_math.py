@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from radiometria._math import interp_columns, interp_uniform_columns, uniform_grid
+from radiometria._math import interp_columns, interp_table, interp_uniform_columns, uniform_grid
 
 
 def _table(rng, n=37, columns=3):
@@ -91,6 +91,19 @@ def test_interp_uniform_columns_equals_interp_columns():
     ref = jax.grad(loss, argnums=(1, 2))(lambda x, fp: interp_columns(x, xp, fp), inside, fp)
     for a, b in zip(ours, ref, strict=True):
         np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-13)
+
+
+@pytest.mark.parametrize("even", [True, False])
+def test_interp_table_is_np_interp_with_or_without_a_grid(even):
+    rng = np.random.default_rng(7)
+    xp = 360.0 + 5.0 * np.arange(20) if even else np.sort(rng.uniform(360.0, 460.0, 20))
+    grid = uniform_grid(xp)
+    assert (grid is not None) == even
+    fp = rng.random(20)
+    x = rng.uniform(340.0, 480.0, 300)
+    got = interp_table(jnp.asarray(x), jnp.asarray(xp), jnp.asarray(fp), grid, 0.0, 0.0)
+    want = np.interp(x, xp, fp, left=0.0, right=0.0)
+    np.testing.assert_allclose(np.asarray(got), want, rtol=1e-13, atol=1e-14)
 
 
 def test_uniform_grid_refuses_uneven_knots():

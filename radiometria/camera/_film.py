@@ -38,7 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._checks import as_float_array, check_last_axis, check_positive_int
-from .._math import interp_columns, interp_uniform_columns, uniform_grid
+from .._math import interp_table, uniform_grid
 from .._types import Array, ArrayLike, Float
 from ..colorimetry import get_cmfs, get_colourspace
 from ._filters import AbstractFilter
@@ -271,11 +271,7 @@ def film_samples_to_XYZ(
     p = jnp.broadcast_to(p.astype(dtype), L.shape)
     table_wl = film.cmf_wavelengths_nm.astype(dtype)
     table = film.cmf_values.astype(dtype)
-    grid = film.cmf_grid_nm
-    if grid is None:
-        cmf = interp_columns(wl, table_wl, table, left=0.0, right=0.0)
-    else:  # evenly spaced (the CIE tables): the row without a search
-        cmf = interp_uniform_columns(wl, *grid, table, left=0.0, right=0.0)
+    cmf = interp_table(wl, table_wl, table, film.cmf_grid_nm, left=0.0, right=0.0)
     ok = p > 0
     inv_p = jnp.where(ok, 1.0 / jnp.where(ok, p, 1.0), 0.0)
     contrib = (L * inv_p)[..., None] * cmf  # (..., n_lambda, 3)

@@ -35,7 +35,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._checks import as_float_array, check_last_axis
-from .._math import interp_columns, interp_uniform_columns, uniform_grid
+from .._math import interp_table, uniform_grid
 from ..colorimetry import get_colourspace
 from ..radiometry import AbstractSpectrum
 from ._forward import forward_model
@@ -184,18 +184,11 @@ class RGBIlluminantSpectrum(AbstractSpectrum):
         the table). [relative]"""
         wl = as_float_array(wavelength_nm, "wavelength_nm")
         dtype = common_float_dtype(wl, self.illuminant_values)
-        if self.illuminant_grid_nm is not None:  # evenly spaced: the row without a search
-            return interp_uniform_columns(
-                wl.astype(dtype),
-                *self.illuminant_grid_nm,
-                self.illuminant_values.astype(dtype),
-                left=0.0,
-                right=0.0,
-            )
-        return interp_columns(
+        return interp_table(
             wl.astype(dtype),
             self.illuminant_wavelengths_nm.astype(dtype),
             self.illuminant_values.astype(dtype),
+            self.illuminant_grid_nm,
             left=0.0,
             right=0.0,
         )
