@@ -174,9 +174,9 @@ def test_a_constant_grid_is_the_homogeneous_medium():
 
 
 def test_compacting_the_walks_into_fewer_lanes_changes_no_estimate(monkeypatch):
-    """The tracking loops gather the walks still going into half as many lanes as others
-    end (`_grid._staged_loop`); every path's estimate equals, to the bit, what one loop over
-    all the lanes gives, for free flights and transmittances."""
+    """The tracking loops gather the walks still going into an eighth as many lanes as
+    others end (`_grid._staged_loop`); every path's estimate equals, to the bit, what one
+    loop over all the lanes gives, for free flights and transmittances."""
     from radiometria.media import _grid
 
     grid = _blob()
