@@ -403,10 +403,11 @@ def cpu_xla_flags(flags: str, device_count: int | None = None) -> str:
     for each on every iteration of a `while` loop. A loop whose buffers are small (below
     `xla_cpu_small_while_loop_byte_threshold` bytes of HLO cost analysis, 1024 by default)
     and that holds no custom call, scatter or sort is compiled instead into one function that
-    runs the whole loop. The tracking loops of a heterogeneous medium (chunks of 256 paths
-    walking majorant cells, `radiometria.media.GridMedium`) are such loops, above the default:
-    `bench_media.py`'s heterogeneous scene (128 x 128, 16 spp, two CPU devices, warm) renders
-    in 0.69 s with a threshold of 4 MiB against 1.09 s with the default, the same image. The
+    runs the whole loop. The tracking loops of a heterogeneous medium (loops of 2048, 256 and
+    32 paths walking majorant cells, `radiometria.media.GridMedium`) are such loops, above the
+    default: `bench_media.py`'s heterogeneous scene (128 x 128, 16 spp, two CPU devices, warm;
+    measured when the walks ran in single loops of 256 paths) renders in 0.69 s with a
+    threshold of 4 MiB against 1.09 s with the default, the same image. The
     density grid counts in a tracking loop's cost: a 64^3 grid stays below 4 MiB
     (`trilinear_lookup` reads it by one gather), a 128^3 grid needs more (the same scene with
     a 128^3 grid: 1.03 s at 4 MiB, 0.92 s at 32 MiB, 0.88 s at 64 MiB). The Cornell box,
