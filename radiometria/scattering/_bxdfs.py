@@ -225,6 +225,16 @@ class AbstractBxDF(eqx.Module):
     def pdf(self, wo, wi) -> Array:
         """Solid-angle density of `sample_f` producing `wi` (0 for delta lobes), `(...)`. [sr^-1]"""
 
+    def f_pdf_sample(
+        self, wo, wi, u_lobe, u2, *, mode: str = "radiance"
+    ) -> tuple[Array, Array, BSDFSample]:
+        """`(f(wo, wi), pdf(wo, wi), sample_f(wo, u_lobe, u2))` in one call: what a path
+        tracer asks at each vertex (the BxDF and density in next-event estimation's direction
+        `wi`, and the next direction). The default makes the three calls; a BxDF that is a
+        mixture of kinds over a batch (the renderer's `MaterialSet`) evaluates each kind once,
+        on its own paths, instead of three times."""
+        return self.f(wo, wi, mode=mode), self.pdf(wo, wi), self.sample_f(wo, u_lobe, u2, mode=mode)
+
 
 class _AbstractDeltaBxDF(AbstractBxDF):
     """A BxDF of delta lobes only (smooth conductor, dielectric, thin dielectric): `f` and
@@ -838,8 +848,8 @@ def _generic_terms(distribution, o, i, m, ax, ay, masking: str):
     r"""(D(m), Lambda(wo), G) of any distribution, vectors as (x, y, z); G is the
     height-correlated $1/(1 + \Lambda_o + \Lambda_i)$ or the separable $G_1G_1$."""
     d = _at(distribution, ax, ay)
-    D = d.D(_stack3(*m))
-    lo, li = d.lambda_(_stack3(*o)), d.lambda_(_stack3(*i))
+    D = d._D_xyz(*m)
+    lo, li = d._lambda_xyz(*o), d._lambda_xyz(*i)
     if masking == "height_correlated":
         G = 1.0 / (1.0 + lo + li)
     else:
@@ -851,8 +861,7 @@ def _sample_m(distribution, o, ax, ay, u0, u1) -> tuple[Array, Array, Array]:
     """A visible microfacet normal for `o` = (x, y, z), as (x, y, z)."""
     if _is_ggx(distribution):
         return _sample_wm_xyz(*o, ax, ay, u0, u1)
-    m = _at(distribution, ax, ay).sample_wm(_stack3(*o), jnp.stack([u0, u1], axis=-1))
-    return _xyz(m)
+    return _at(distribution, ax, ay)._sample_wm_xyz(*o, u0, u1)
 
 
 class RoughConductorBxDF(AbstractBxDF):

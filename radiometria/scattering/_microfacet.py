@@ -11,13 +11,14 @@ directions (an array `alpha` of shape `(...)` goes with directions `(..., 3)`).
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import jax.scipy.special as jsp
 from jax import Array
 
 from .._checks import as_float_array
 from .._math import align_ranks, safe_sqrt
-from ._directions import _inv_norm, _sqrt_clamped, _stack3
+from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
 from ._warps import _sample_disk_concentric
 
 __all__ = ["BeckmannDistribution", "TrowbridgeReitzDistribution", "roughness_to_alpha"]
@@ -142,6 +143,24 @@ class TrowbridgeReitzDistribution(eqx.Module):
         """Microfacet normal density $D(\\omega_m)$ (symmetric in $\\pm z$). [sr^-1]"""
         return 1.0 / _D_den(*self._axy(wm))
 
+    def _D_xyz(self, x, y, z) -> Array:
+        """`D` of normals given as components `(...)`."""
+        x, y, z, ax, ay = align_ranks(x, y, z, self.alpha_x, self.alpha_y)
+        return 1.0 / _D_den(x, y, z, ax, ay)
+
+    def _lambda_xyz(self, x, y, z) -> Array:
+        """`lambda_` of directions given as components `(...)`."""
+        x, y, z, ax, ay = align_ranks(x, y, z, self.alpha_x, self.alpha_y)
+        az = jnp.abs(z)
+        ok = az > 0
+        return jnp.where(ok, 0.5 * (_slope_root(x, y, z, ax, ay) / jnp.where(ok, az, 1.0) - 1.0),
+                         jnp.inf)  # fmt: skip
+
+    def _sample_wm_xyz(self, x, y, z, u0, u1) -> tuple[Array, Array, Array]:
+        """`sample_wm` with directions and normals as components `(...)`."""
+        x, y, z, ax, ay, u0, u1 = align_ranks(x, y, z, self.alpha_x, self.alpha_y, u0, u1)
+        return _sample_wm_xyz(x, y, z, ax, ay, u0, u1)
+
     def _sq_slope_term(self, w: Array) -> tuple[Array, Array]:
         """Returns (|z|, sqrt(z^2 + alpha_x^2 x^2 + alpha_y^2 y^2))."""
         x, y, z, ax, ay = self._axy(w)
@@ -149,9 +168,7 @@ class TrowbridgeReitzDistribution(eqx.Module):
 
     def lambda_(self, w) -> Array:
         r"""Smith's $\Lambda(\omega) = (\sqrt{1 + \alpha^2\tan^2\theta} - 1)/2$; inf at grazing."""
-        az, r = self._sq_slope_term(w)
-        ok = az > 0
-        return jnp.where(ok, 0.5 * (r / jnp.where(ok, az, 1.0) - 1.0), jnp.inf)
+        return self._lambda_xyz(*_xyz(as_float_array(w, "w")))
 
     def G1(self, w) -> Array:
         r"""Smith masking function $G_1(\omega) = 1/(1 + \Lambda(\omega))$, in [0, 1]; 0 at grazing.
@@ -249,6 +266,7 @@ def _beckmann_sample11(cos_theta: Array, u0: Array, u1: Array) -> tuple[Array, A
     tan_theta = sin_theta / cos_theta
     cot_theta = cos_theta / jnp.maximum(sin_theta, 1e-7)
     u0 = jnp.maximum(u0, eps)
+    one = jnp.asarray(1.0 - 1e-7 if dtype == jnp.float64 else 1.0 - 1e-6, dtype)
     # Newton-bisection on b = erf(slope_x) in the bracket [-1, erf(cot theta)].
     lo = -jnp.ones_like(cos_theta)
     hi = jsp.erf(cot_theta)
@@ -256,26 +274,39 @@ def _beckmann_sample11(cos_theta: Array, u0: Array, u1: Array) -> tuple[Array, A
     fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta))
     b = hi - (1.0 + hi) * (1.0 - u0) ** fit
     norm = 1.0 / (1.0 + hi + _INV_SQRT_PI * tan_theta * jnp.exp(-cot_theta * cot_theta))
-    one = jnp.asarray(1.0 - 1e-7 if dtype == jnp.float64 else 1.0 - 1e-6, dtype)
-    done = jnp.zeros(cos_theta.shape, bool)
-    for _ in range(_NEWTON_STEPS):  # a fixed number of vectorised steps, not a loop over data
-        b = jnp.where((b >= lo) & (b <= hi), b, 0.5 * (lo + hi))
-        inv = jsp.erfinv(jnp.clip(b, -one, one))
-        value = norm * (1.0 + b + _INV_SQRT_PI * tan_theta * jnp.exp(-inv * inv)) - u0
-        deriv = norm * (1.0 - inv * tan_theta)
+    b = jnp.where((b >= lo) & (b <= hi), b, 0.5 * (lo + hi))
+    # Rows: erf(slope_x), iterated, and erf(slope_y) = 2 u1 - 1, a unit Gaussian over sqrt 2.
+    b, by, lo, hi = jnp.broadcast_arrays(b, 2.0 * jnp.maximum(u1, eps) - 1.0, lo, hi)
+    b = jnp.stack([b, by])
+    inv = jsp.erfinv(jnp.clip(b, -one, one))
+
+    def step(_, carry):
+        b, inv, lo, hi, done = carry
+        bx, ix = b[0], inv[0]
+        value = norm * (1.0 + bx + _INV_SQRT_PI * tan_theta * jnp.exp(-ix * ix)) - u0
+        deriv = norm * (1.0 - ix * tan_theta)
         done = done | (jnp.abs(value) < 1e-5)
-        lo = jnp.where(done | (value > 0), lo, b)
-        hi = jnp.where(~done & (value > 0), b, hi)
+        lo = jnp.where(done | (value > 0), lo, bx)
+        hi = jnp.where(~done & (value > 0), bx, hi)
         safe = jnp.where(jnp.abs(deriv) > 0, deriv, 1.0)
-        b = jnp.where(done, b, b - value / safe)
-    slope_x = jsp.erfinv(jnp.clip(b, -one, one))
-    slope_y = jsp.erfinv(jnp.clip(2.0 * jnp.maximum(u1, eps) - 1.0, -one, one))
+        bx = jnp.where(done, bx, bx - value / safe)
+        bx = jnp.where((bx >= lo) & (bx <= hi), bx, 0.5 * (lo + hi))
+        b = jnp.stack([bx, b[1]])
+        return b, jsp.erfinv(jnp.clip(b, -one, one)), lo, hi, done
+
+    # A loop of static length, not unrolled Python steps, whose state holds both slopes'
+    # erfinv: they leave it stored in a buffer. Unrolled (and with slope_y computed apart, a
+    # value XLA hoists out of any loop), XLA's CPU backend copied the erfinv polynomials
+    # into every fusion that reads the slopes (13 copies in a rough plastic's `sample_f`,
+    # counted in the compiled HLO), which made sampling several times slower.
+    done = jnp.zeros(lo.shape, bool)
+    _, inv, _, _, _ = jax.lax.fori_loop(0, _NEWTON_STEPS, step, (b, inv, lo, hi, done))
     # Near normal incidence the visible slopes are the plain Gaussian ones (polar form).
     normal = cos_theta > 0.9999
     r = jnp.sqrt(-jnp.log1p(-u0))
     phi = 2.0 * jnp.pi * u1
-    slope_x = jnp.where(normal, r * jnp.cos(phi), slope_x)
-    slope_y = jnp.where(normal, r * jnp.sin(phi), slope_y)
+    slope_x = jnp.where(normal, r * jnp.cos(phi), inv[0])
+    slope_y = jnp.where(normal, r * jnp.sin(phi), inv[1])
     return slope_x, slope_y
 
 
@@ -314,20 +345,21 @@ class BeckmannDistribution(eqx.Module):
         self.alpha_x = jnp.maximum(ax, ALPHA_MIN)
         self.alpha_y = jnp.maximum(ay, ALPHA_MIN)
 
-    def _axy(self, w: Array) -> tuple[Array, Array, Array, Array, Array]:
-        return align_ranks(w[..., 0], w[..., 1], w[..., 2], self.alpha_x, self.alpha_y)
-
-    def D(self, wm) -> Array:
-        """Microfacet normal density $D(\\omega_m)$, 0 for $m_z \\le 0$. [sr^-1]"""
-        x, y, z, ax, ay = self._axy(as_float_array(wm, "wm"))
+    def _D_xyz(self, x, y, z) -> Array:
+        """`D` of normals given as components `(...)`."""
+        x, y, z, ax, ay = align_ranks(x, y, z, self.alpha_x, self.alpha_y)
         ok = z > 0
         z2 = jnp.where(ok, z * z, 1.0)
         e = ((x / ax) ** 2 + (y / ay) ** 2) / z2
         return jnp.where(ok, jnp.exp(-e) / (jnp.pi * ax * ay * z2 * z2), 0.0)
 
-    def lambda_(self, w) -> Array:
-        r"""Smith's $\Lambda(\omega)$ (exact form above); 0 at normal incidence, inf at grazing."""
-        x, y, z, ax, ay = self._axy(as_float_array(w, "w"))
+    def D(self, wm) -> Array:
+        """Microfacet normal density $D(\\omega_m)$, 0 for $m_z \\le 0$. [sr^-1]"""
+        return self._D_xyz(*_xyz(as_float_array(wm, "wm")))
+
+    def _lambda_xyz(self, x, y, z) -> Array:
+        """`lambda_` of directions given as components `(...)`."""
+        x, y, z, ax, ay = align_ranks(x, y, z, self.alpha_x, self.alpha_y)
         s = jnp.sqrt((ax * x) ** 2 + (ay * y) ** 2)  # alpha tan(theta) |cos theta|
         az = jnp.abs(z)
         normal = s <= 1e-12 * az
@@ -336,6 +368,10 @@ class BeckmannDistribution(eqx.Module):
         lam = 0.5 * (jsp.erf(a) - 1.0 + jnp.exp(-a * a) * _INV_SQRT_PI / a)
         lam = jnp.maximum(lam, 0.0)
         return jnp.where(normal, 0.0, jnp.where(grazing, jnp.inf, lam))
+
+    def lambda_(self, w) -> Array:
+        r"""Smith's $\Lambda(\omega)$ (exact form above); 0 at normal incidence, inf at grazing."""
+        return self._lambda_xyz(*_xyz(as_float_array(w, "w")))
 
     def G1(self, w) -> Array:
         r"""Smith masking $G_1(\omega) = 1/(1 + \Lambda(\omega))$, in [0, 1]; 0 at grazing."""
@@ -383,8 +419,11 @@ class BeckmannDistribution(eqx.Module):
         """
         w = as_float_array(w, "w")
         u = as_float_array(u, "u")
-        x, y, z, ax, ay = self._axy(w)
-        x, y, z, ax, ay, u0, u1 = align_ranks(x, y, z, ax, ay, u[..., 0], u[..., 1])
+        return _stack3(*self._sample_wm_xyz(*_xyz(w), u[..., 0], u[..., 1]))
+
+    def _sample_wm_xyz(self, x, y, z, u0, u1) -> tuple[Array, Array, Array]:
+        """`sample_wm` with directions and normals as components `(...)`."""
+        x, y, z, ax, ay, u0, u1 = align_ranks(x, y, z, self.alpha_x, self.alpha_y, u0, u1)
         sign = jnp.where(z < 0, -1.0, 1.0)
         hx, hy, hz = ax * x * sign, ay * y * sign, z * sign
         inv, _ = _inv_norm(hx, hy, hz)
@@ -398,4 +437,4 @@ class BeckmannDistribution(eqx.Module):
         sx, sy = cphi * sx - sphi * sy, sphi * sx + cphi * sy
         mx, my, mz = -ax * sx, -ay * sy, jnp.ones_like(sx)
         inv, _ = _inv_norm(mx, my, mz)
-        return _stack3(mx * inv, my * inv, mz * inv)
+        return mx * inv, my * inv, mz * inv

@@ -104,6 +104,11 @@ def _lobe_probability(a: Array, b: Array) -> Array:
     return safe_div(a, a + b)
 
 
+def _up_xyz(w: Array, flip: Array) -> tuple[Array, Array, Array]:
+    """`_up` as components `(x, y, z)`, each `(...)`; `flip` `(...)`."""
+    return w[..., 0], w[..., 1], jnp.where(flip, -w[..., 2], w[..., 2])
+
+
 def _up(w: Array, flip: Array) -> Array:
     """Mirror `w` through the surface where `flip`: the BxDFs are evaluated with wo on +z."""
     return jnp.concatenate([w[..., :2], jnp.where(flip, -w[..., 2:], w[..., 2:])], axis=-1)
@@ -391,38 +396,45 @@ class RoughPlasticBxDF(AbstractBxDF):
         )[1]
 
     def _value_pdf(self, o, i, d, s, eta, alpha, table, fdr, w) -> tuple[Array, Array]:
-        """(f, pdf) for `o` on +z (mirrored there by the caller), any `i`."""
+        """(f, pdf) for `o` on +z (mirrored there by the caller), any `i`; both directions as
+        components `(x, y, z)`, each `(...)`. Written component-wise, as the GGX cores of
+        `_microfacet`: XLA's CPU backend recomputes a whole fused expression for every
+        component read from stacked `(..., 3)` vectors (measured: a Beckmann rough plastic's
+        `sample_f` took 0.45 us per path that way)."""
         dist = _DISTRIBUTIONS[self.distribution](alpha)
-        c_o, c_i = o[..., 2], i[..., 2]
-        ok = (c_o > 0) & (c_i > 0)
-        h = o + i
-        n2 = jnp.sum(h * h, axis=-1)
-        h = h / jnp.sqrt(jnp.where(n2 > 0, n2, 1.0))[..., None]
-        den = jnp.where(ok, 4.0 * c_o * c_i, 1.0)
-        g_o = dist.G1(o)
-        dg = dist.D(h) * g_o
-        spec = _fresnel(jnp.sum(o * h, axis=-1), eta) * dg * dist.G1(i) / den
-        t_o, t_i = _lerp_table(table, c_o), _lerp_table(table, jnp.clip(c_i, 0.0, 1.0))
+        (ox, oy, oz), (ix, iy, iz) = o, i
+        ok = (oz > 0) & (iz > 0)
+        hx, hy, hz = ox + ix, oy + iy, oz + iz
+        n2 = hx * hx + hy * hy + hz * hz
+        inv = 1.0 / jnp.sqrt(jnp.where(n2 > 0, n2, 1.0))
+        hx, hy, hz = hx * inv, hy * inv, hz * inv
+        den = jnp.where(ok, 4.0 * oz * iz, 1.0)
+        dg = dist._D_xyz(hx, hy, hz) / (1.0 + dist._lambda_xyz(ox, oy, oz))
+        g_i = 1.0 / (1.0 + dist._lambda_xyz(ix, iy, iz))
+        spec = _fresnel(ox * hx + oy * hy + oz * hz, eta) * dg * g_i / den
+        t_o, t_i = _lerp_table(table, oz), _lerp_table(table, jnp.clip(iz, 0.0, 1.0))
         fdr = fdr[..., None]
         nonlinear = jnp.broadcast_to(self.nonlinear, eta.shape)[..., None]
         base = d / (1.0 - jnp.where(nonlinear, d * fdr, fdr))
         value = s * spec[..., None] + base * (t_o * t_i / (eta * eta * jnp.pi))[..., None]
         p_s = _lobe_probability((1.0 - t_o) * w, t_o * (1.0 - w))
-        pdf = p_s * dg / jnp.where(ok, 4.0 * c_o, 1.0) + (1.0 - p_s) * c_i / jnp.pi
+        pdf = p_s * dg / jnp.where(ok, 4.0 * oz, 1.0) + (1.0 - p_s) * iz / jnp.pi
         return jnp.where(ok[..., None], value, 0.0), jnp.where(ok, pdf, 0.0)
 
     def f(self, wo, wi, *, mode: str = "radiance") -> Array:
         _check_mode(mode)
         wo, wi = _dirs(("wo", wo), ("wi", wi))
         wo, wi, d, s, eta, a, t, fdr, w = self._all((wo, 1), (wi, 1))
-        flip = wo[..., 2:] < 0
-        return self._value_pdf(_up(wo, flip), _up(wi, flip), d, s, eta, a, t, fdr, w)[0]
+        flip = wo[..., 2] < 0
+        o, i = _up_xyz(wo, flip), _up_xyz(wi, flip)
+        return self._value_pdf(o, i, d, s, eta, a, t, fdr, w)[0]
 
     def pdf(self, wo, wi) -> Array:
         wo, wi = _dirs(("wo", wo), ("wi", wi))
         wo, wi, d, s, eta, a, t, fdr, w = self._all((wo, 1), (wi, 1))
-        flip = wo[..., 2:] < 0
-        return self._value_pdf(_up(wo, flip), _up(wi, flip), d, s, eta, a, t, fdr, w)[1]
+        flip = wo[..., 2] < 0
+        o, i = _up_xyz(wo, flip), _up_xyz(wi, flip)
+        return self._value_pdf(o, i, d, s, eta, a, t, fdr, w)[1]
 
     def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
         _check_mode(mode)
@@ -430,19 +442,24 @@ class RoughPlasticBxDF(AbstractBxDF):
         u_lobe = as_float_array(u_lobe, "u_lobe")
         u2 = _u2(u2)
         wo, u_lobe, u2, d, s, eta, a, t, fdr, w = self._all((wo, 1), (u_lobe, 0), (u2, 1))
-        flip = wo[..., 2:] < 0
-        o = _up(wo, flip)
-        t_o = _lerp_table(t, o[..., 2])
+        flip = wo[..., 2] < 0
+        o = ox, oy, oz = _up_xyz(wo, flip)
+        t_o = _lerp_table(t, oz)
         specular = u_lobe < _lobe_probability((1.0 - t_o) * w, t_o * (1.0 - w))
-        m = _DISTRIBUTIONS[self.distribution](a).sample_wm(o, u2)
-        reflected = 2.0 * jnp.sum(o * m, axis=-1, keepdims=True) * m - o  # thesis eq. 3.8
-        x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
-        i = jnp.where(specular[..., None], reflected, _stack3(x, y, z))
+        u0, u1 = u2[..., 0], u2[..., 1]
+        mx, my, mz = _DISTRIBUTIONS[self.distribution](a)._sample_wm_xyz(ox, oy, oz, u0, u1)
+        c = 2.0 * (ox * mx + oy * my + oz * mz)  # reflection about m (thesis eq. 3.8)
+        x, y, z = _sample_cosine_hemisphere(u0, u1)
+        i = (
+            jnp.where(specular, c * mx - ox, x),
+            jnp.where(specular, c * my - oy, y),
+            jnp.where(specular, c * mz - oz, z),
+        )
         value, pdf = self._value_pdf(o, i, d, s, eta, a, t, fdr, w)
         ok = pdf > 0
         sample = BSDFSample(
             f=value,
-            wi=_up(i, flip),
+            wi=_stack3(i[0], i[1], jnp.where(flip, -i[2], i[2])),
             pdf=pdf,
             is_delta=jnp.zeros(ok.shape, bool),
             is_transmission=jnp.zeros(ok.shape, bool),

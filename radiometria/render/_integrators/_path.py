@@ -500,10 +500,12 @@ def _scatter(
     # Next-event estimation: a point on a light (e.g. an emissive triangle chosen by power x
     # area, then a uniform point on it) or a direction to a light at infinity (unbounded
     # shadow ray), weighted against BSDF sampling by MIS (delta lights: weight 1).
+    # The BSDF's three queries at once (one pass per material kind in a mixed scene).
     ls = scene.light.sample_li(v.p, u_b[:, 4], u_b[:, 0:2], wavelength_nm)
     wi_l = to_local(ls.wi)
-    f_light = bsdf.f(wo_l, wi_l) * jnp.abs(wi_l[:, 2:3])
-    w_light = power_heuristic(1, ls.pdf, 1, bsdf.pdf(wo_l, wi_l))
+    f_light, pdf_bsdf, bs = bsdf.f_pdf_sample(wo_l, wi_l, u_b[:, 5], u_b[:, 2:4])
+    f_light = f_light * jnp.abs(wi_l[:, 2:3])
+    w_light = power_heuristic(1, ls.pdf, 1, pdf_bsdf)
     if ls.delta is not None:  # a delta light (point, spot, directional): no BSDF sample finds it
         w_light = jnp.where(ls.delta, 1.0, w_light)
     use = alive & (ls.pdf > 0)
@@ -513,8 +515,7 @@ def _scatter(
     nee = beta * f_light * ls.radiance * (w_light / jnp.where(use, ls.pdf, 1.0))[:, None]
     radiance = radiance + jnp.where(use[:, None], nee, 0.0)
 
-    # BSDF sampling: the next path segment.
-    bs = bsdf.sample_f(wo_l, u_b[:, 5], u_b[:, 2:4])
+    # BSDF sampling (`bs`): the next path segment.
     alive = alive & (bs.pdf > 0)
     weight = bs.f * (jnp.abs(bs.wi[:, 2]) / jnp.where(alive, bs.pdf, 1.0))[:, None]
     beta = jnp.where(alive[:, None], beta * weight, 0.0)

@@ -395,8 +395,9 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     # Next-event estimation, weighted against BSDF / phase sampling by MIS.
     ls = scene.light.sample_li(p, u_b[:, 4], u_b[:, 0:2], wavelength_nm)
     wi_l = to_local(ls.wi)
-    f_light = bsdf.f(wo_l, wi_l) * jnp.abs(wi_l[:, 2:3])
-    pdf_dir = bsdf.pdf(wo_l, wi_l)
+    # The BSDF's three queries at once (one pass per material kind in a mixed scene).
+    f_light, pdf_dir, bs = bsdf.f_pdf_sample(wo_l, wi_l, u_b[:, 5], u_b[:, 2:4])
+    f_light = f_light * jnp.abs(wi_l[:, 2:3])
     if media is not None:
         ph = media.phase(walk.medium, wo, ls.wi, wavelength_nm)
         f_light = jnp.where(in_medium[:, None], ph[:, None], f_light)
@@ -427,7 +428,6 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
     radiance = radiance + jnp.where(use[:, None], nee, 0.0)
 
     # The next segment: a BSDF sample at a surface, a phase-function sample in a medium.
-    bs = bsdf.sample_f(wo_l, u_b[:, 5], u_b[:, 2:4])
     wi = to_world(bs.wi)
     wi = wi / jnp.sqrt(dot(wi, wi))[:, None]
     ok = bs.pdf > 0

@@ -129,34 +129,38 @@ class MaterialSet(eqx.Module):
         """The BxDF of each path's material at its wavelengths (`(n,)`, `(n, k)` [nm]) and
         surface coordinates `uv` (`(n, 2)` [1], or `None`: textures are looked up at (0, 0)),
         which plugins with textured parameters (`USES_UV`) receive, and the hits'
-        `HitGeometry` (or `None`), which normal and bump maps need (`USES_GEOMETRY`)."""
+        `HitGeometry` (or `None`), which normal and bump maps need (`USES_GEOMETRY`).
+
+        With one kind this is the plugin's own BxDF. With several it is a `_Mixture` that
+        builds each kind's BxDF (texture lookups, spectral upsampling, table rows) only for
+        the paths of that kind, inside each query."""
         rows = material if self.identity_rows else self.row_of[material]
-
-        def one(p):
-            if p.USES_GEOMETRY:
-                return p.bxdf(rows, wavelength_nm, uv, geometry)
-            return p.bxdf(rows, wavelength_nm, uv) if p.USES_UV else p.bxdf(rows, wavelength_nm)
-
         if len(self.plugins) == 1:
-            return one(self.plugins[0])
-        parts = tuple(one(p) for p in self.plugins)
-        return _Mixture(self.plugin_of[material], parts)
+            return _build(self.plugins[0], rows, wavelength_nm, uv, geometry)
+        return _Mixture(self.plugin_of[material], rows, wavelength_nm, uv, geometry, self.plugins)
+
+
+def _build(plugin: AbstractMaterial, rows, wavelength_nm, uv, geometry) -> AbstractBxDF:
+    """`plugin`'s BxDF of the rows `rows`, given what its kind uses (uv, geometry)."""
+    if plugin.USES_GEOMETRY:
+        return plugin.bxdf(rows, wavelength_nm, uv, geometry)
+    return plugin.bxdf(rows, wavelength_nm, uv) if plugin.USES_UV else plugin.bxdf(rows, wavelength_nm)
 
 
 _BLOCKS = 4  # each kind is evaluated in blocks of n / _BLOCKS paths, only as many as it needs
 _MIN_SPLIT = 64  # batches smaller than this evaluate every kind on every path
 
 
-def _on_paths(method, part, args, mask):
-    """`method(part, *args)` for the paths of `mask` `(n,)` (elsewhere the result is 0): the
-    paths of `mask` are gathered first and evaluated in blocks of `n / _BLOCKS`, only as many
-    blocks as they fill (`lax.cond` skips the others; the loop's static trip count keeps it
-    differentiable), so a kind few paths use (a metal ball on a diffuse floor) costs in
-    proportion to those paths. Leaves of `part` with a leading axis of `n` are per-path
-    parameters and are gathered with the arguments."""
+def _on_paths(fn, args, mask):
+    """`fn(*args)` for the paths of `mask` `(n,)` (elsewhere the result is 0), where every
+    array leaf of `args` has the leading path axis `n`: the paths of `mask` are gathered
+    first and evaluated in blocks of `n / _BLOCKS`, only as many blocks as they fill
+    (`lax.cond` skips the others; the loop's static trip count keeps it differentiable), so
+    a kind few paths use (a metal ball on a diffuse floor) costs in proportion to those
+    paths."""
     n = mask.shape[0]
     if n < _MIN_SPLIT:
-        return method(part, *args)
+        return fn(*args)
     m = -(-n // _BLOCKS)
     (order,) = jnp.nonzero(mask, size=m * _BLOCKS, fill_value=n)
     count = jnp.sum(mask, dtype=jnp.int32)
@@ -165,11 +169,9 @@ def _on_paths(method, part, args, mask):
         idx = jax.lax.dynamic_slice_in_dim(order, j * m, m)
 
         def take(x):
-            if hasattr(x, "shape") and x.ndim >= 1 and x.shape[0] == n:
-                return jnp.take(x, idx, axis=0, mode="clip")
-            return x
+            return jnp.take(x, idx, axis=0, mode="clip")
 
-        return idx, method(jax.tree.map(take, part), *(take(a) for a in args))
+        return idx, fn(*jax.tree.map(take, args))
 
     _, shapes = jax.eval_shape(block, 0)
     init = jax.tree.map(lambda sd: jnp.zeros((n,) + sd.shape[1:], sd.dtype), shapes)
@@ -184,39 +186,70 @@ def _on_paths(method, part, args, mask):
     return jax.lax.fori_loop(0, _BLOCKS, body, init)
 
 
-class _Mixture(AbstractBxDF):
-    """The BxDFs of several material kinds, one chosen per path by `plugin` (`where` selects).
+def _pick(plugin, values):
+    """Per path, the value of its kind `plugin` `(n,)` among `values` (one per kind)."""
+    out = values[0]
+    for i, v in enumerate(values[1:], start=1):
+        mask = (plugin == i).reshape(plugin.shape + (1,) * (v.ndim - 1))
+        out = jnp.where(mask, v, out)
+    return out
 
-    Each kind is evaluated on the paths that use it (`_on_paths`): with a rough conductor
-    ball on a diffuse floor under an environment map, every path once evaluated the
-    microfacet model, which took 60 % of the render.
+
+class _Mixture(AbstractBxDF):
+    """The BxDFs of several material kinds, one chosen per path by `plugin`.
+
+    Each query builds and evaluates each kind's BxDF on the paths that use it (`_on_paths`):
+    with a rough conductor ball on a diffuse floor under an environment map, every path once
+    evaluated the microfacet model, which took 60 % of the render; and building every kind
+    for every path (a rough plastic's tables, a bitmap's texels) took a third of a textured
+    scene's render. `f_pdf_sample` answers a path vertex's three queries with one pass per
+    kind.
     """
 
-    plugin: Array  # (n,) index into `parts`
-    parts: tuple
+    plugin: Array  # (n,) index into `kinds`
+    rows: Array  # (n,) each path's row in its kind's table
+    wavelength_nm: Array  # (n, k)
+    uv: Array | None
+    geometry: object  # HitGeometry | None
+    kinds: tuple  # the MaterialSet's plugins
 
-    def _pick(self, values):
-        out = values[0]
-        for i, v in enumerate(values[1:], start=1):
-            mask = (self.plugin == i).reshape(self.plugin.shape + (1,) * (v.ndim - 1))
-            out = jnp.where(mask, v, out)
+    def _each(self, query, *args):
+        """`query(bxdf, *args)` of each kind on its paths."""
+        out = []
+        for i, kind in enumerate(self.kinds):
+
+            def fn(rows, wl, uv, geometry, *a, kind=kind):
+                return query(_build(kind, rows, wl, uv, geometry), *a)
+
+            per_path = (self.rows, self.wavelength_nm, self.uv, self.geometry, *args)
+            out.append(_on_paths(fn, per_path, self.plugin == i))
         return out
 
-    def _each(self, method, *args):
-        return [_on_paths(method, b, args, self.plugin == i) for i, b in enumerate(self.parts)]
-
-    def f(self, wo, wi, *, mode: str = "radiance"):
-        return self._pick(self._each(lambda b, o, i: b.f(o, i, mode=mode), wo, wi))
-
-    def pdf(self, wo, wi):
-        return self._pick(self._each(lambda b, o, i: b.pdf(o, i), wo, wi))
-
-    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
-        samples = self._each(lambda b, o, u, v: b.sample_f(o, u, v, mode=mode), wo, u_lobe, u2)
+    def _pick_sample(self, samples) -> BSDFSample:
         return BSDFSample(
             **{
-                name: self._pick([getattr(s, name) for s in samples])
+                name: _pick(self.plugin, [getattr(s, name) for s in samples])
                 for name in ("f", "wi", "pdf", "is_delta", "is_transmission", "eta",
                              "terminate_secondary")
             }
         )  # fmt: skip
+
+    def f(self, wo, wi, *, mode: str = "radiance"):
+        return _pick(self.plugin, self._each(lambda b, o, i: b.f(o, i, mode=mode), wo, wi))
+
+    def pdf(self, wo, wi):
+        return _pick(self.plugin, self._each(lambda b, o, i: b.pdf(o, i), wo, wi))
+
+    def sample_f(self, wo, u_lobe, u2, *, mode: str = "radiance") -> BSDFSample:
+        samples = self._each(lambda b, o, u, v: b.sample_f(o, u, v, mode=mode), wo, u_lobe, u2)
+        return self._pick_sample(samples)
+
+    def f_pdf_sample(self, wo, wi, u_lobe, u2, *, mode: str = "radiance"):
+        parts = self._each(
+            lambda b, o, i, u, v: b.f_pdf_sample(o, i, u, v, mode=mode), wo, wi, u_lobe, u2
+        )
+        return (
+            _pick(self.plugin, [p[0] for p in parts]),
+            _pick(self.plugin, [p[1] for p in parts]),
+            self._pick_sample([p[2] for p in parts]),
+        )
