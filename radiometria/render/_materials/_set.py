@@ -144,7 +144,9 @@ def _build(plugin: AbstractMaterial, rows, wavelength_nm, uv, geometry) -> Abstr
     """`plugin`'s BxDF of the rows `rows`, given what its kind uses (uv, geometry)."""
     if plugin.USES_GEOMETRY:
         return plugin.bxdf(rows, wavelength_nm, uv, geometry)
-    return plugin.bxdf(rows, wavelength_nm, uv) if plugin.USES_UV else plugin.bxdf(rows, wavelength_nm)
+    if plugin.USES_UV:
+        return plugin.bxdf(rows, wavelength_nm, uv)
+    return plugin.bxdf(rows, wavelength_nm)
 
 
 _BLOCKS = 4  # each kind is evaluated in blocks of n / _BLOCKS paths, only as many as it needs
