@@ -49,37 +49,53 @@ def _directions(n, seed):
     return w[0].at[:, 2].set(jnp.abs(w[0][:, 2])), w[1]
 
 
-def test_material_set_gives_each_path_its_own_bxdf():
-    """A scene of several kinds evaluates every kind and picks per path (`where`); each path's
-    value, density and sample must be exactly its own plugin's."""
+@pytest.mark.parametrize("n", [40, 300])
+def test_material_set_gives_each_path_its_own_bxdf(n):
+    """A scene of several kinds gives each path exactly its own plugin's value, density and
+    sample, asked one query at a time or all three at once (`f_pdf_sample`). With 40 paths
+    every kind is evaluated on every path and picked per path; with 300 each kind's BxDF is
+    built and evaluated only on its own paths, gathered into blocks and scattered back
+    (`_materials._set._on_paths`), which must change no path's result and mix no paths up."""
     props = [
         ("diffuse", {"reflectance": 0.3}),
         ("roughconductor", {"material": "Au", "alpha": 0.3, "specular_reflectance": 0.5}),
         ("dielectric", {"int_ior": 1.7, "specular_transmittance": 0.8}),
         ("diffuse", {"reflectance": rr.LinearRGB([0.2, 0.5, 0.7])}),
         ("roughdiffuse", {"reflectance": 0.6, "alpha": 0.4}),
+        ("roughplastic", {"diffuse_reflectance": rr.LinearRGB([0.1, 0.3, 0.7]), "alpha": 0.2}),
     ]
     plugins = [_registry.MATERIALS[t].from_properties(p) for t, p in props]
     mset = rr.MaterialSet.from_materials(plugins)
-    assert len(mset.plugins) == 4 and not mset.identity_rows
-    n = 40
-    material = jnp.arange(n, dtype=jnp.int32) % len(props)
+    assert len(mset.plugins) == 5 and not mset.identity_rows
+    # Kinds in an irregular order, so that a block's paths are not a contiguous run.
+    material = jnp.asarray((np.arange(n) * 7 + np.arange(n) // 5) % len(props), jnp.int32)
     wl = _wavelengths(n)
     wo, wi = _directions(n, 0)
     u = _uniform(1, (n, 3))
     mixed = mset.bxdf(material, wl)
     sample = mixed.sample_f(wo, u[:, 0], u[:, 1:])
+    f_all, pdf_all, sample_all = mixed.f_pdf_sample(wo, wi, u[:, 0], u[:, 1:])
+
+    def same(got, want, rows):
+        got, want = np.asarray(got)[rows], np.asarray(want)[rows]
+        if got.dtype == bool:
+            np.testing.assert_array_equal(got, want)
+        else:
+            np.testing.assert_allclose(got, want, rtol=2e-6, atol=1e-7)
+
     for m, plugin in enumerate(plugins):
         own = plugin.bxdf(jnp.zeros(n, jnp.int32), wl)
         rows = np.flatnonzero(np.asarray(material) == m)
-        np.testing.assert_array_equal(np.asarray(mixed.f(wo, wi))[rows], own.f(wo, wi)[rows])
-        np.testing.assert_array_equal(np.asarray(mixed.pdf(wo, wi))[rows], own.pdf(wo, wi)[rows])
+        same(mixed.f(wo, wi), own.f(wo, wi), rows)
+        same(mixed.pdf(wo, wi), own.pdf(wo, wi), rows)
+        same(f_all, own.f(wo, wi), rows)
+        same(pdf_all, own.pdf(wo, wi), rows)
         expect = own.sample_f(wo, u[:, 0], u[:, 1:])
         for field in ("f", "wi", "pdf", "is_delta", "is_transmission", "eta"):
-            np.testing.assert_array_equal(
-                np.asarray(getattr(sample, field))[rows], np.asarray(getattr(expect, field))[rows]
-            )
-    assert np.asarray(mset.transmissive).tolist() == [False, False, True, False, False]
+            same(getattr(sample, field), getattr(expect, field), rows)
+            same(getattr(sample_all, field), getattr(expect, field), rows)
+    transmissive = [False, False, True, False, False, False]
+    assert np.asarray(mset.transmissive).tolist() == transmissive
 
 
 def test_specular_reflectance_scales_reflection_only():
