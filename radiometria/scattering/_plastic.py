@@ -399,8 +399,9 @@ class RoughPlasticBxDF(AbstractBxDF):
         """(f, pdf) for `o` on +z (mirrored there by the caller), any `i`; both directions as
         components `(x, y, z)`, each `(...)`. Written component-wise, as the GGX cores of
         `_microfacet`: XLA's CPU backend recomputes a whole fused expression for every
-        component read from stacked `(..., 3)` vectors (measured: a Beckmann rough plastic's
-        `sample_f` took 0.45 us per path that way)."""
+        component it reads from stacked `(..., 3)` vectors. Measured on 2048 paths (a
+        float32 loop of queries, 2 cores): `f` 60 -> 17-22 ns per path, Beckmann
+        `sample_f` 430-530 -> 190-250 ns, GGX `sample_f` 110-130 -> 45-70 ns."""
         dist = _DISTRIBUTIONS[self.distribution](alpha)
         (ox, oy, oz), (ix, iy, iz) = o, i
         ok = (oz > 0) & (iz > 0)

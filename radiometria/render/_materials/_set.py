@@ -202,10 +202,10 @@ class _Mixture(AbstractBxDF):
 
     Each query builds and evaluates each kind's BxDF on the paths that use it (`_on_paths`):
     with a rough conductor ball on a diffuse floor under an environment map, every path once
-    evaluated the microfacet model, which took 60 % of the render; and building every kind
-    for every path (a rough plastic's tables, a bitmap's texels) took a third of a textured
-    scene's render. `f_pdf_sample` answers a path vertex's three queries with one pass per
-    kind.
+    evaluated the microfacet model, which took 60 % of the render. Building a kind's BxDF
+    (texture lookups, spectral upsampling, table rows) happens inside those blocks too, so a
+    kind costs nothing on the paths of the others. `f_pdf_sample` answers a path vertex's
+    three queries with one pass per kind.
     """
 
     plugin: Array  # (n,) index into `kinds`
