@@ -198,3 +198,28 @@ def test_default_emission_is_mitsubas_d65_white(tmp_path):
     se = np.sqrt(var.mean((0, 1)) / n * (1 / spp + 1 / ref_spp))
     diff = np.abs(ours.mean((0, 1)) - mean.mean((0, 1)))
     assert np.all(diff < 4 * se + 1e-3), (ours.mean((0, 1)), mean.mean((0, 1)), se)
+
+
+@pytest.mark.parametrize("param", ['integer name="max_depth" value="0"',
+                                   'integer name="rr_depth" value="-2"'])  # fmt: skip
+def test_an_integrator_parameter_out_of_range_names_the_file_and_line(tmp_path, param):
+    """The integrator's own range check (`max_depth >= 1`) is reported with the file and the
+    line of the `<integrator>`, as every other scene error (found by the loader fuzz test)."""
+    body = '<shape type="obj"><string name="filename" value="tri.obj"/></shape>\n'
+    body += f'<integrator type="path">\n  <{param}/>\n</integrator>'
+    _write(tmp_path / "tri.obj", OBJ)
+    path = _write(tmp_path / "scene.xml", _scene(body))
+    name = param.split('"')[1]
+    with pytest.raises(SceneError, match=rf"scene\.xml:3: <integrator>: `{name}` must be an int"):
+        load_scene(path)
+
+
+@pytest.mark.parametrize("scale", ["1.5e154", "1e200"])
+def test_a_transform_that_overflows_is_a_scene_error(tmp_path, scale):
+    """A `to_world` whose lengths overflow float64 is refused with the file, the line and the
+    parameter named, not a NumPy overflow warning (found by the loader fuzz test)."""
+    body = f'<shape type="sphere"><transform name="to_world"><scale value="{scale}"/>'
+    body += "</transform></shape>"
+    path = _write(tmp_path / "scene.xml", _scene(body))
+    with pytest.raises(SceneError, match=r"scene\.xml:2: shape 'sphere': parameter 'to_world'"):
+        load_scene(path)

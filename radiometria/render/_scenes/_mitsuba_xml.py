@@ -1103,10 +1103,12 @@ def _integrator(ctx: _Ctx, node: _Node) -> tuple[str, dict]:
             raise ctx.err(node, "a 'moment' integrator needs exactly one nested <integrator>")
         return _integrator(ctx, nested[0])
     kind, p = _plugin(ctx, node, INTEGRATORS, "integrator")
+    where = f"{node.file or ctx.file}:{node.line}"
     try:
-        INTEGRATORS[kind].from_properties(p, where=f"{node.file or ctx.file}:{node.line}")
-    except ValueError as e:
-        raise SceneError(str(e)) from None
+        INTEGRATORS[kind].from_properties(p, where=where)
+    except (ValueError, TypeError) as e:
+        # The plugin's own checks (`check_path_fields`: max_depth 0) may not name the file.
+        raise (SceneError(str(e)) if where in str(e) else ctx.err(node, str(e))) from None
     return kind, p
 
 

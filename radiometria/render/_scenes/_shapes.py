@@ -243,14 +243,20 @@ def transform_mesh(
     m = np.asarray(to_world, np.float64)
     lin = m[:3, :3]
     cols = lin[:, :dims]
-    scale = np.prod(np.linalg.norm(cols, axis=0))
-    if dims == 3:
-        volume = abs(np.linalg.det(lin))
-    else:
-        volume = np.linalg.norm(np.cross(cols[:, 0], cols[:, 1])) if dims == 2 else scale
-    if dims == 1:  # a mesh of any dimension: only a transform that collapses everything
-        scale = volume = float(np.linalg.norm(lin))
-    if not np.isfinite(volume) or not scale > 0 or volume <= 1e-12 * scale:
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
+        scale = np.prod(np.linalg.norm(cols, axis=0))
+        if dims == 3:
+            volume = abs(np.linalg.det(lin))
+        else:
+            volume = np.linalg.norm(np.cross(cols[:, 0], cols[:, 1])) if dims == 2 else scale
+        if dims == 1:  # a mesh of any dimension: only a transform that collapses everything
+            scale = volume = float(np.linalg.norm(lin))
+    if not (np.all(np.isfinite(m)) and np.isfinite(scale) and np.isfinite(volume)):
+        raise ValueError(
+            "the transform is not finite or too large (its lengths, areas or volumes overflow "
+            f"float64); linear part {lin.tolist()}, translation {m[:3, 3].tolist()}."
+        )
+    if not scale > 0 or volume <= 1e-12 * scale:
         raise ValueError(
             f"the transform is degenerate: it maps the shape's {dims} axes to a "
             f"{'plane or lower (zero volume' if dims == 3 else 'line or point (zero area'}; "
@@ -261,8 +267,14 @@ def transform_mesh(
         v = mesh.vertices @ lin.T + m[:3, 3]
     normals = mesh.normals
     if normals is not None:
-        n = normals @ _cofactor(lin).T
-        n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+            n = normals @ _cofactor(lin).T
+            n = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        if not np.all(np.isfinite(n)):
+            raise ValueError(
+                "the transform is too large for the shape's normals (their cofactor matrix "
+                f"overflows float64); linear part {lin.tolist()}."
+            )
         normals = -n if flip_normals else n
     f = mesh.faces[:, [0, 2, 1]] if flip_normals else mesh.faces
     return ShapeMesh(
