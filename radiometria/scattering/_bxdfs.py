@@ -64,7 +64,6 @@ from ._microfacet import (
     BeckmannDistribution,
     TrowbridgeReitzDistribution,
     _D_den,
-    _sample_wm_xyz,
     _slope_root,
 )
 from ._warps import _sample_disk_concentric
@@ -858,9 +857,8 @@ def _generic_terms(distribution, o, i, m, ax, ay, masking: str):
 
 
 def _sample_m(distribution, o, ax, ay, u0, u1) -> tuple[Array, Array, Array]:
-    """A visible microfacet normal for `o` = (x, y, z), as (x, y, z)."""
-    if _is_ggx(distribution):
-        return _sample_wm_xyz(*o, ax, ay, u0, u1)
+    """A visible microfacet normal for `o` = (x, y, z), as (x, y, z) (both distributions
+    sample component-wise)."""
     return _at(distribution, ax, ay)._sample_wm_xyz(*o, u0, u1)
 
 
