@@ -294,6 +294,7 @@ def path_radiance(
         specular=jnp.ones((n_rays,), bool),  # camera rays: emission seen with MIS weight 1
         eta_scale=jnp.ones((n_rays,), dtype),
         hero_only=jnp.zeros((n_rays,), bool),
+        escaped=jnp.zeros((n_rays,), bool),
     )
     chunk = _default_chunk(n_rays) if chunk is None else min(int(chunk), n_rays)
     n_pad = -(-n_rays // chunk) * chunk
@@ -355,10 +356,29 @@ def path_radiance(
 
     segments = jnp.arange(max_depth, dtype=jnp.int32)
     state, _ = jax.lax.scan(one_segment if compact else one_segment_all, state, segments)
+    radiance = state.radiance + escaped_radiance(scene, state, wavelength_nm)
     # A path through a dispersive interface kept only its hero wavelength: its estimate is the
     # hero's alone, weighted as one wavelength out of k (pbrt's `TerminateSecondary`).
     hero = jnp.zeros((1, k), dtype).at[0, 0].set(k)
-    return jnp.where(state.hero_only[:, None], state.radiance[:, :1] * hero, state.radiance)
+    return jnp.where(state.hero_only[:, None], radiance[:, :1] * hero, radiance)
+
+
+def escaped_radiance(scene: RenderScene, state, wavelength_nm) -> Float[Array, "n k"]:
+    """What the lights at infinity (`constant`, `envmap`) add to paths that left the scene:
+    `beta L_e(d) w` for the paths flagged `state.escaped`, where `d`, `beta`, `pdf` and
+    `specular` are those of the escaping segment and `w` weighs the escape against
+    next-event estimation of the same direction (power heuristic; 1 after a delta lobe or
+    from the camera).
+
+    A path escapes at most once (it ends there), so the segments only record the escape and
+    this looks the light up once per path, after the segment loop, instead of once per
+    traced path in every segment (where most lanes hit a surface and the lookup, an image
+    map's four texels and its distribution's density, would be thrown away)."""
+    esc = state.escaped
+    le = scene.light.emitted_escaped(state.d, esc, wavelength_nm)
+    pdf_light = scene.light.pdf_escaped(state.d)
+    w = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
+    return jnp.where(esc[:, None], state.beta * le * w[:, None], 0.0)
 
 
 def _default_chunk(n_rays: int) -> int:
@@ -385,6 +405,9 @@ class _PathState(eqx.Module):
     specular: Array  # bool (n,): `d` came from the camera or a delta lobe (no MIS)
     eta_scale: Array  # (n,): product of eta^2 over refractions, for roulette (Mitsuba, pbrt)
     hero_only: Array  # bool (n,): secondary wavelengths terminated by dispersion
+    # bool (n,): the path left the scene; `d`, `beta`, `pdf` and `specular` stay those of the
+    # escaping segment, for `escaped_radiance` after the loop.
+    escaped: Array
 
 
 def _segment(
@@ -405,25 +428,42 @@ def _segment(
     v = _vertex(scene, state.o, state.d)
     le = scene.light.emitted(v.face, v.cos_o, v.valid, wavelength_nm, v.uv)
     pdf_light = scene.light.pdf_li(v.face, v.t, v.cos_o, state.o)
-    # A ray that leaves the scene sees the lights at infinity (constant, envmap), weighted
-    # against next-event estimation of the same direction like a hit on an emitter.
-    escaped = state.alive & ~v.valid
-    le_inf = scene.light.emitted_escaped(state.d, escaped, wavelength_nm)
-    le = jnp.where(v.valid[:, None], le, le_inf)
-    pdf_light = jnp.where(v.valid, pdf_light, scene.light.pdf_escaped(state.d))
     w = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
     if hide_emitters:  # emitters seen directly from the camera are black (Mitsuba)
         w = jnp.where(b == 0, 0.0, w)
-    radiance = state.radiance + state.beta * le * w[:, None]
+    radiance = state.radiance + jnp.where(v.valid[:, None], state.beta * le * w[:, None], 0.0)
+    # A ray that leaves the scene sees the lights at infinity (constant, envmap), weighted
+    # against next-event estimation of the same direction like a hit on an emitter: recorded
+    # here and looked up once per path after the loop (`escaped_radiance`).
+    escaped = state.alive & ~v.valid
+    if hide_emitters:
+        escaped = escaped & (b > 0)
+    pre = state
     state = eqx.tree_at(lambda s: (s.radiance, s.alive), state, (radiance, state.alive & v.valid))
     if max_depth == 1:
-        return eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive))
-    return jax.lax.cond(
-        b < max_depth - 1,
-        lambda: _scatter(
-            scene, state, v, wavelength_nm, sample(), roulette=b >= rr_depth - 1, prune=prune
+        new = eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive))
+    else:
+        new = jax.lax.cond(
+            b < max_depth - 1,
+            lambda: _scatter(
+                scene, state, v, wavelength_nm, sample(), roulette=b >= rr_depth - 1, prune=prune
+            ),
+            lambda: eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive)),
+        )
+
+    def at_escape(x, old):
+        return jnp.where(escaped.reshape(escaped.shape + (1,) * (x.ndim - 1)), old, x)
+
+    return eqx.tree_at(
+        lambda s: (s.d, s.beta, s.pdf, s.specular, s.escaped),
+        new,
+        (
+            at_escape(new.d, pre.d),
+            at_escape(new.beta, pre.beta),
+            at_escape(new.pdf, pre.pdf),
+            at_escape(new.specular, pre.specular),
+            new.escaped | escaped,
         ),
-        lambda: eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive)),
     )
 
 
@@ -541,6 +581,7 @@ def _scatter(
         specular=bs.is_delta,
         eta_scale=eta_scale,
         hero_only=state.hero_only | (alive & bs.terminate_secondary),
+        escaped=state.escaped,
     )
 
 
