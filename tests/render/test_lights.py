@@ -192,6 +192,23 @@ def test_constant_environment_furnace(tmp_path):
     _check_image(image, _constant(1.0), 64, "constant furnace", sample_sd=0.35, mean_rtol=0.01)
 
 
+def test_path_hide_emitters_under_a_constant_sky(tmp_path):
+    # Mitsuba's `hide_emitters`: the sky seen directly by camera rays is black, and the sky
+    # still lights the white plane, which therefore reflects exactly L = 1 (the furnace
+    # above, through `path` and escapes after the first segment only).
+    light = '<emitter type="constant"><rgb name="radiance" value="1"/></emitter>'
+    hidden = '<integrator type="path"><boolean name="hide_emitters" value="true"/></integrator>'
+
+    def scene(**kw):
+        return _scene(light, integrator="path", **kw).replace('<integrator type="path"/>', hidden)
+
+    sky = _render(_write(tmp_path, scene(plane=False, extra=_far_triangle()), "sky.xml"), 4)
+    assert np.all(sky == 0), np.abs(sky).max()
+    text = scene().replace(f'value="{RHO}"', 'value="1"')
+    image = _render(_write(tmp_path, text), spp=64)
+    _check_image(image, _constant(1.0), 64, "hidden sky furnace", sample_sd=0.35, mean_rtol=0.01)
+
+
 def test_light_set_picks_by_power():
     # Two point lights (intensities 1 and 3) and a directional one: probabilities are the
     # powers 4 pi I and pi r^2 E over their sum.
