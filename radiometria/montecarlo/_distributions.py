@@ -55,8 +55,14 @@ def _find_interval(
     """Largest `i` in [0, n-1] with `cdf[row, i] <= u`, for `cdf` of shape (rows, n+1).
 
     A fixed-length binary search (pbrt's `FindInterval`) so that it vectorises and jits; with a
-    `guide` (`_guide_tables`) the search starts from the guide's bracket of `u` and takes the
-    guide's `steps` (often 1-4) instead of log2(n) + 1.
+    `guide` (`_guide_tables`) the search starts from the guide's bracket `[lo, hi]` of `u`.
+    A bracket of at most `_SPAN_COUNTED` cells is finished without a search: one gather
+    reads the `span` CDF values after `lo` and the answer is `lo` plus how many of those
+    within the bracket are `<= u` (the CDF is non-decreasing). Chained searches (a 2D
+    distribution's row, then its column) compiled as dependent gathers cost XLA:CPU far more
+    than their arithmetic: a `PiecewiseConstant2D.sample` of the `envmap` benchmark's sky
+    measured 128-150 ns per sample (2048 samples, float32) with a guided binary search and
+    52 ns with the counted bracket. Wider brackets take the guide's `steps` halvings.
     """
     n = cdf.shape[-1] - 1
     flat = cdf.reshape(-1)
@@ -72,6 +78,15 @@ def _find_interval(
         lo = guide.lower.reshape(-1)[g].astype(jnp.int32)
         hi = guide.upper.reshape(-1)[g + 1].astype(jnp.int32)
         steps = guide.steps
+        if guide.span <= _SPAN_COUNTED:
+            if guide.span == 0:
+                return lo
+            k = jnp.arange(guide.span, dtype=jnp.int32).reshape((1,) * u.ndim + (-1,))
+            # cdf[lo + 1 + k] for k < span (clipped at the table's end; masked past `hi`).
+            after = jnp.take(flat, (base + lo + 1)[..., None] + k, mode="clip")
+            inside = k < (hi - lo)[..., None]
+            count = jnp.sum(inside & (after <= u[..., None]), axis=-1, dtype=jnp.int32)
+            return lo + count
     for _ in range(steps):
         mid = (lo + hi + 1) // 2
         ok = flat[base + mid] <= u
@@ -82,17 +97,20 @@ def _find_interval(
 
 
 _GUIDE_SLACK = 1.0e-6  # > the float32 rounding of u * m and of the CDF's values
+_SPAN_COUNTED = 8  # guide brackets up to this many cells are counted, not searched
 _GUIDE_BYTES = 32 * 2**20  # the most a distribution's guide tables take
 
 
 class _Guide(eqx.Module):
     """Guide tables of a CDF (`_guide_tables`): `lower[r, k]` (`upper[r, k]`) is the largest
     `i` with `cdf[r, i] <= k/m - slack` (`+ slack`), so that the interval of any `u` in
-    `[j/m, (j+1)/m)` lies in `[lower[r, j], upper[r, j+1]]`, a bracket `steps` halvings close."""
+    `[j/m, (j+1)/m)` lies in `[lower[r, j], upper[r, j+1]]`, a bracket `steps` halvings close
+    and at most `span` cells wider than one."""
 
     lower: Int[Array, "rows cuts"]  # int16 or int32; cuts = m + 1
     upper: Int[Array, "rows cuts"]
     steps: int = eqx.field(static=True)
+    span: int = eqx.field(static=True)
 
 
 def _guide_tables(cdf) -> "_Guide | None":
@@ -120,7 +138,7 @@ def _guide_tables(cdf) -> "_Guide | None":
     lower, upper = largest(k - _GUIDE_SLACK), largest(k + _GUIDE_SLACK)
     widest = int(np.max(upper[:, 1:].astype(np.int64) - lower[:, :-1]))
     steps = math.ceil(math.log2(widest + 1))
-    return _Guide(jnp.asarray(lower), jnp.asarray(upper), steps)
+    return _Guide(jnp.asarray(lower), jnp.asarray(upper), steps, widest)
 
 
 def _unit_clip(x: Array) -> Array:

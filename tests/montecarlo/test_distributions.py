@@ -61,6 +61,7 @@ def _hostile_variates(cdf: np.ndarray, dtype, m: int) -> np.ndarray:
     return u[(u >= 0) & (u < 1)]
 
 
+@pytest.mark.parametrize("counted", [0, 10**6], ids=["searched", "counted"])
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize(
     "table",
@@ -72,11 +73,16 @@ def _hostile_variates(cdf: np.ndarray, dtype, m: int) -> np.ndarray:
     ],
     ids=["spike", "sun", "ripples", "one-cell"],
 )
-def test_guided_search_finds_what_a_plain_search_finds(table, dtype):
+def test_guided_search_finds_what_a_plain_search_finds(table, dtype, counted, monkeypatch):
     """The cutpoint tables change the work, never the answer: for every variate (also at,
     just below and just above each CDF value and cutpoint) the interval is NumPy's
-    `searchsorted` on the same CDF, in 1D and in each row of 2D."""
+    `searchsorted` on the same CDF, in 1D and in each row of 2D, whether the guide's bracket
+    is finished by halvings or by counting its CDF values (`counted`: the widest bracket
+    counted)."""
+    from radiometria.montecarlo import _distributions
     from radiometria.montecarlo._distributions import _find_interval
+
+    monkeypatch.setattr(_distributions, "_SPAN_COUNTED", counted)
 
     dist1 = mc.PiecewiseConstant1D(jnp.asarray(table, dtype))
     dist2 = mc.PiecewiseConstant2D(jnp.asarray(np.stack([table, table[::-1]]), dtype))
