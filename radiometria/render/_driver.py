@@ -296,10 +296,13 @@ def _trace(kernel: _Kernel, key, spp, pass_start, pixel, *, cfg: _Config):
         footprints = jnp.sum(values, axis=1).reshape(t, 1, 1, channels)
     else:
         d = jnp.arange(-radius, radius + 1, dtype=dtype)
-        # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis.
-        to_centre = corner[:, None, :] + 0.5 - raster[:, None, :] + d[None, :, None]  # (n, F, 2)
-        f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype).reshape(t, k, 2 * radius + 1, 2)
-        fy, fx = f1[..., 1], f1[..., 0]
+        # Offset of each footprint pixel's centre from the sample: f1(c - x) per axis, laid
+        # out (2, F, n) with the paths last: XLA:CPU vectorises along the minor axis, and the
+        # filter's exponentials on (n, F, 2) measured 63 ns per path against 8 ns (Gaussian,
+        # 65536 paths, F = 5).
+        to_centre = (corner + 0.5 - raster).T[:, None, :] + d[None, :, None]  # (2, F, n)
+        f1 = kernel.rfilter.evaluate_1d(to_centre).astype(dtype)
+        fx, fy = (jnp.moveaxis(f1[a], 0, -1).reshape(t, k, 2 * radius + 1) for a in (0, 1))
         if k <= _UNROLLED_PASSES:  # one fused elementwise loop (`_UNROLLED_PASSES`)
             footprints = sum(
                 fy[:, i, :, None, None] * fx[:, i, None, :, None] * values[:, i, None, None, :]
