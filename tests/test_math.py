@@ -112,3 +112,18 @@ def test_uniform_grid_refuses_uneven_knots():
     assert uniform_grid([3.0, 2.0, 1.0]) is None
     start, step = uniform_grid(np.linspace(360.0, 830.0, 471))
     assert (start, step) == (360.0, 1.0)
+
+
+@pytest.mark.parametrize("n", [1, 255, 256, 1000, 65536])
+@pytest.mark.parametrize("fraction", [0.0, 0.4, 1.0])
+def test_compact_indices_is_jnp_nonzero_with_a_size(n, fraction):
+    """The live-path compaction gives `jnp.nonzero(mask, size=, fill_value=)`'s indices for
+    sizes below, at and above the number of True entries, under `jit`."""
+    from radiometria._math import compact_indices
+
+    mask = np.random.default_rng(n).uniform(size=n) < fraction
+    for size in {1, max(1, int(mask.sum()) // 2), n, n + 300}:
+        want = np.asarray(jnp.nonzero(jnp.asarray(mask), size=size, fill_value=n)[0])
+        got = jax.jit(compact_indices, static_argnums=(1, 2))(jnp.asarray(mask), size, n)
+        assert got.dtype == jnp.int32
+        np.testing.assert_array_equal(np.asarray(got), want)

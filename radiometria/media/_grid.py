@@ -84,7 +84,7 @@ from jaxtyping import Array, Float
 
 from .._bits import pcg4d, uint32_to_unit_float
 from .._checks import as_float_array
-from .._math import safe_div
+from .._math import compact_indices, safe_div
 from ._medium import AbstractMedium, MediumInteraction
 from ._phase import AbstractPhaseFunction
 from ._validation import check_coefficient
@@ -298,9 +298,9 @@ def _staged_loop(body, ray: _Ray, track: _Track) -> _Track:
     fewer lanes as they finish (module docstring, "Loop").
 
     A loop over `n` lanes runs until its longest walk ends, every iteration costing all `n`
-    lanes. Here the loop stops once at most `n / _STAGE_FACTOR` paths are active; those are
-    gathered into that many lanes (`jnp.nonzero` with a static size), the next loop goes on
-    with them, down to `_STAGE_MIN` lanes, and the results are scattered back. Each path
+    lanes. Here the loop stops once at most `n / _STAGE_FACTOR` paths are active; those are gathered
+    into that many lanes (`_math.compact_indices`: `jnp.nonzero` with a static size), the next loop
+    goes on with them, down to `_STAGE_MIN` lanes, and the results are scattered back. Each path
     does the same steps with the same variates in either case (only when a group's tentative
     collisions are evaluated differs), so the estimates are the same. The gathers and
     scatters sit between the loops, which stay free of scatters and custom calls, so
@@ -316,7 +316,7 @@ def _staged_loop(body, ray: _Ray, track: _Track) -> _Track:
     track = lax.while_loop(cond, lambda c: body(ray, c), track)
     if floor == 0:
         return track
-    (idx,) = jnp.nonzero(track.active, size=size, fill_value=n)
+    idx = compact_indices(track.active, size, n)
 
     def take(x):
         return jnp.take(x, idx, axis=0, mode="clip")

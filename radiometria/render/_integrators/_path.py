@@ -19,12 +19,11 @@ its light (`AbstractLight`) samples and weighs next-event estimation, and its ma
 Everything is structure-of-arrays over the ray batch, and the loop over path segments is one
 `lax.scan` of static length `max_depth` (one compiled copy of a segment: its hit, the emission
 there, and, but for the last segment, next-event estimation, the BSDF sample and roulette).
-Within a segment, the live paths are compacted (`jnp.nonzero` with a static size) and traced
-in chunks of static size by a `lax.fori_loop` whose trip count is the number of live chunks:
-terminated paths (escaped, absorbed, killed by roulette, or never started) cost nothing, and
-every shape stays static. Random numbers come
-in as one array `u` of shape `(rays, sample_dimensions(max_depth))`, so independent and
-quasi-random samplers feed the same code.
+Within a segment, the live paths are compacted (`_math.compact_indices`: `jnp.nonzero` with a static
+size) and traced in chunks of static size by a `lax.fori_loop` whose trip count is the number of
+live chunks: terminated paths (escaped, absorbed, killed by roulette, or never started) cost
+nothing, and every shape stays static. Random numbers come in as one array `u` of shape `(rays,
+sample_dimensions(max_depth))`, so independent and quasi-random samplers feed the same code.
 
 **Derivatives.** Radiance estimates are differentiable in the scene's spectra (reflectance and
 emission rows of the `SpectrumTable`s, hence in the RGB colours or temperatures they are
@@ -58,7 +57,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float
 
-from ..._math import dot
+from ..._math import compact_indices, dot
 from ...montecarlo import power_heuristic
 from ...scattering import coordinate_system
 from .._materials import HitGeometry
@@ -333,7 +332,7 @@ def path_radiance(
     def one_segment(state: _PathState, b):
         # Stream compaction: only live paths are traced, in chunks of static size, so the
         # work per segment follows the number of live paths, not the batch.
-        (live,) = jnp.nonzero(state.alive, size=n_pad, fill_value=n_rays)
+        live = compact_indices(state.alive, n_pad, n_rays)
         n_chunks = (jnp.sum(state.alive, dtype=jnp.int32) + chunk - 1) // chunk
 
         def one_chunk(i, state):

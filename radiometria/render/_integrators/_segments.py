@@ -3,9 +3,9 @@ each tracing only the live paths, compacted into chunks of static size.
 
 `run_segments(state, segment, ...)` runs `segment(state_chunk, wavelength_chunk, paths, b)`
 for `b = 0 .. n_segments - 1`, where `state` is a pytree of arrays with a leading path axis
-and a boolean field `alive`. With `compact=True` each segment gathers the indices of the live
-paths (`jnp.nonzero` with a static size) and traces them in chunks of `chunk` paths by a
-`lax.fori_loop` whose trip count is the number of live chunks, so terminated paths cost
+and a boolean field `alive`. With `compact=True` each segment gathers the indices of the live paths
+(`_math.compact_indices`: `jnp.nonzero` with a static size) and traces them in chunks of `chunk`
+paths by a `lax.fori_loop` whose trip count is the number of live chunks, so terminated paths cost
 nothing and every shape stays static. With `compact=False` every path is traced in every
 segment and the results of terminated ones are discarded: a loop of static length, which
 reverse-mode differentiation (`jax.grad`) can pass through. This is the loop of `path_radiance`
@@ -14,6 +14,8 @@ reverse-mode differentiation (`jax.grad`) can pass through. This is the loop of 
 
 import jax
 import jax.numpy as jnp
+
+from ..._math import compact_indices
 
 __all__ = ["run_segments"]
 
@@ -49,7 +51,7 @@ def run_segments(state, segment, wavelength_nm, *, n_segments: int, chunk: int, 
     n_pad = -(-n // chunk) * chunk
 
     def live_paths(state, b):
-        (live,) = jnp.nonzero(state.alive, size=n_pad, fill_value=n)
+        live = compact_indices(state.alive, n_pad, n)
         n_chunks = (jnp.sum(state.alive, dtype=jnp.int32) + chunk - 1) // chunk
 
         def one_chunk(i, state):

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Int
 
+from ..._math import compact_indices
 from ...scattering import AbstractBxDF, BSDFSample
 from ._base import AbstractMaterial, concatenate
 
@@ -164,7 +165,7 @@ def _on_paths(fn, args, mask):
     if n < _MIN_SPLIT:
         return fn(*args)
     m = -(-n // _BLOCKS)
-    (order,) = jnp.nonzero(mask, size=m * _BLOCKS, fill_value=n)
+    order = compact_indices(mask, m * _BLOCKS, n)
     count = jnp.sum(mask, dtype=jnp.int32)
 
     def block(j):
