@@ -14,6 +14,9 @@ from jax import Array
 from jax.typing import ArrayLike
 
 __all__ = [
+    "acos_fast",
+    "asin_fast",
+    "atan2_fast",
     "compact_indices",
     "align_ranks",
     "dot",
@@ -199,3 +202,52 @@ def compact_indices(mask: Array, size: int, fill_value: int) -> Array:
     slot = jnp.where(mask, slot, jnp.int32(size))  # past the end: dropped
     out = jnp.full((size,), fill_value, jnp.int32)
     return out.at[slot].set(jnp.arange(n, dtype=jnp.int32), mode="drop", unique_indices=True)
+
+
+# Cephes' atanf polynomial (Moshier 1989) on [0, tan(pi/8)]: atan(a) = a + a z P(z), z = a^2.
+_ATAN_P = (8.05374449538e-2, -1.38776856032e-1, 1.99777106478e-1, -3.33329491539e-1)
+
+
+def atan2_fast(y: Array, x: Array) -> Array:
+    """`jnp.arctan2(y, x)` [rad] for finite `y`, `x`; in float32 by a polynomial that
+    XLA:CPU vectorises (other dtypes: `jnp.arctan2` itself).
+
+    The ratio `min(|x|, |y|) / max(|x|, |y|)` in [0, 1] is reduced to [0, tan(pi/8)] by
+    `atan(a) = pi/4 + atan((a - 1) / (a + 1))`, where Cephes' `atanf` polynomial holds, and
+    the octant is restored from the signs (signed zeros as `arctan2`: `(0, -0)` gives pi).
+    Measured against float64 `arctan2` on 200000 normal pairs: at most 3 float32 ulps; 1.9 ns
+    per element against 21 ns for XLA:CPU's `atan2` (2048 elements, one core), which is not
+    vectorised.
+
+    ??? cite "References"
+        `Moshier1989` (Cephes `atanf`).
+    """
+    y, x = jnp.asarray(y), jnp.asarray(x)
+    if jnp.result_type(y, x) != jnp.float32:
+        return jnp.arctan2(y, x)
+    ax, ay = jnp.abs(x), jnp.abs(y)
+    big, small = jnp.maximum(ax, ay), jnp.minimum(ax, ay)
+    a = small / jnp.where(big > 0, big, 1.0)
+    reduced = a > np.float32(0.41421356)  # tan(pi/8)
+    a = jnp.where(reduced, (a - 1.0) / (a + 1.0), a)
+    z = a * a
+    p = ((_ATAN_P[0] * z + _ATAN_P[1]) * z + _ATAN_P[2]) * z + _ATAN_P[3]
+    r = a + a * z * p
+    r = jnp.where(reduced, r + np.float32(np.pi / 4), r)
+    r = jnp.where(ay > ax, np.float32(np.pi / 2) - r, r)
+    r = jnp.where(jnp.signbit(x), np.float32(np.pi) - r, r)
+    return jnp.where(jnp.signbit(y), -r, r)
+
+
+def acos_fast(x: Array) -> Array:
+    """`jnp.arccos(x)` [rad] for `x` in [-1, 1], as `atan2_fast(sqrt((1 - x)(1 + x)), x)`
+    (float32: at most 3 ulps from float64 `arccos` plus the square root's rounding; 16 ns per
+    element for XLA:CPU's `acos`)."""
+    x = jnp.asarray(x)
+    return atan2_fast(jnp.sqrt(jnp.maximum((1.0 - x) * (1.0 + x), 0.0)), x)
+
+
+def asin_fast(x: Array) -> Array:
+    """`jnp.arcsin(x)` [rad] for `x` in [-1, 1], as `atan2_fast(x, sqrt((1 - x)(1 + x)))`."""
+    x = jnp.asarray(x)
+    return atan2_fast(x, jnp.sqrt(jnp.maximum((1.0 - x) * (1.0 + x), 0.0)))

@@ -17,7 +17,7 @@ import jax.scipy.special as jsp
 from jax import Array
 
 from .._checks import as_float_array
-from .._math import align_ranks, safe_sqrt
+from .._math import acos_fast, align_ranks, safe_sqrt
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
 from ._warps import _sample_disk_concentric
 
@@ -270,7 +270,7 @@ def _beckmann_sample11(cos_theta: Array, u0: Array, u1: Array) -> tuple[Array, A
     # Newton-bisection on b = erf(slope_x) in the bracket [-1, erf(cot theta)].
     lo = -jnp.ones_like(cos_theta)
     hi = jsp.erf(cot_theta)
-    theta = jnp.arccos(cos_theta)
+    theta = acos_fast(cos_theta)
     fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta))
     b = hi - (1.0 + hi) * (1.0 - u0) ** fit
     norm = 1.0 / (1.0 + hi + _INV_SQRT_PI * tan_theta * jnp.exp(-cot_theta * cot_theta))

@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
-from ..._math import dot
+from ..._math import acos_fast, atan2_fast, dot
 
 __all__ = ["MAX_ANALYTIC_SPHERES", "Spheres", "sphere_uv"]
 
@@ -50,9 +50,9 @@ def sphere_uv(to_local: Float[Array, "n 3 3"], normal: Float[Array, "n 3"]) -> F
     normals are `normal`, each sphere's object frame given by `to_local` (module docstring).
     [1]"""
     q = jnp.einsum("nij,nj->ni", to_local, normal)
-    phi = jnp.arctan2(q[:, 1], q[:, 0])
+    phi = atan2_fast(q[:, 1], q[:, 0])
     phi = jnp.where(phi < 0, phi + 2.0 * jnp.pi, phi)
-    theta = jnp.arccos(jnp.clip(q[:, 2], -1.0, 1.0))
+    theta = acos_fast(jnp.clip(q[:, 2], -1.0, 1.0))
     return jnp.stack([phi / (2.0 * jnp.pi), theta / jnp.pi], axis=-1)
 
 

@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..._math import dot
+from ..._math import acos_fast, atan2_fast, dot
 from ...camera import read_exr, read_hdr
 from ...montecarlo import PiecewiseConstant2D
 from ...upsampling import (
@@ -238,8 +238,8 @@ class EnvironmentLight(AbstractSurfacelessLight):
     def _uv(self, directions):
         local = directions @ self.world_to_local.T
         local = local / jnp.sqrt(jnp.maximum(dot(local, local), 1e-30))[:, None]
-        u = jnp.mod(jnp.arctan2(local[:, 0], -local[:, 2]) / (2.0 * np.pi), 1.0)
-        v = jnp.arccos(jnp.clip(local[:, 1], -1.0, 1.0)) / np.pi
+        u = jnp.mod(atan2_fast(local[:, 0], -local[:, 2]) / (2.0 * np.pi), 1.0)
+        v = acos_fast(jnp.clip(local[:, 1], -1.0, 1.0)) / np.pi
         sin_theta = jnp.sqrt(local[:, 0] ** 2 + local[:, 2] ** 2)
         return jnp.stack([u, v], axis=-1), sin_theta
 

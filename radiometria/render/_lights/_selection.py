@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
-from ..._math import dot
+from ..._math import acos_fast, asin_fast, dot
 
 __all__ = ["MAX_SPATIAL_EMITTERS", "EmitterBounds"]
 
@@ -162,11 +162,11 @@ class EmitterBounds(eqx.Module):
         dist = jnp.sqrt(d2)
         cos_w = dot(v, self.axis[None]) / jnp.where(dist > 0, dist, 1.0)
         cos_w = jnp.where(self.two_sided[None], jnp.abs(cos_w), cos_w)
-        theta_w = jnp.arccos(jnp.clip(cos_w, -1.0, 1.0))
+        theta_w = acos_fast(jnp.clip(cos_w, -1.0, 1.0))
         r = self.radius[None]
         outside = d2 > r * r
         sin_b = jnp.where(outside, r / jnp.where(outside, dist, 1.0), 0.0)
-        theta_b = jnp.where(outside, jnp.arcsin(jnp.clip(sin_b, 0.0, 1.0)), jnp.pi)
+        theta_b = jnp.where(outside, asin_fast(jnp.clip(sin_b, 0.0, 1.0)), jnp.pi)
         theta = jnp.maximum(theta_w - self.theta_o[None] - theta_b - _ANGLE_MARGIN, 0.0)
         cos_t = jnp.where(theta < 0.5 * jnp.pi, jnp.cos(theta), 0.0)
         omega_b = jnp.where(outside, 2.0 * jnp.pi * (1.0 - jnp.sqrt(1.0 - sin_b * sin_b)),
