@@ -17,7 +17,7 @@ is imported, with the command line's other XLA flags: `radiometria.cli.cpu_xla_f
 radiometria shards the pixels over them; Mitsuba uses its thread pool.
 
     .venv/bin/python benchmarks/bench_render.py [--scene cornell|textured|envmap]
-        [--size 256] [--ref-spp 1024] [--quick]
+        [--size 256] [--ref-spp 1024] [--quick] [--repeats 3]
 
 `--scene textured`: a Mitsuba XML scene (written into `--cache` with its assets) of a floor
 with an sRGB PNG `bitmap` texture (bilinear, repeated), a `checkerboard` sphere, a rough
@@ -194,6 +194,10 @@ def main(argv=None) -> int:
     parser.add_argument("--target-spp", type=int, default=16, help="Mitsuba spp of the target")
     parser.add_argument("--cache", type=Path, default=ROOT / "out" / "bench_render")
     parser.add_argument("--quick", action="store_true", help="64 x 64, reference 256 spp")
+    parser.add_argument(
+        "--repeats", type=int, default=3,
+        help="rounds of timings (each renderer in turn per round); the median is reported",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     if args.quick:
         args.size, args.ref_spp, args.spps = 64, 256, [4, 8, 16, 32]
@@ -234,16 +238,27 @@ def main(argv=None) -> int:
         except Exception as err:  # noqa: BLE001 (libLLVM present but unusable: report and go on)
             print(f"llvm_ad_spectral unavailable: {err}")
 
-    results = {}
-    for name, run in renderers.items():
+    # Timings on a shared 2-core machine vary by 20-25 % from one run to the next, for both
+    # renderers alike: each round times every renderer in turn, and the median of the rounds
+    # is reported (the errors are those of the first round's images, seeds 100 + i).
+    for run in renderers.values():
         run(args.spps[0], 1)  # warm-up: compiles radiometria's step, Mitsuba's kernels
-        rows = []
-        for i, spp in enumerate(args.spps):
-            img, t = _timed(lambda run=run, spp=spp, i=i: run(spp, 100 + i))
-            rows.append({"spp": spp, "seconds": t, "rel_mse": rel_mse(img, reference),
-                         "mean_rgb": img.mean(axis=(0, 1)).tolist()})  # fmt: skip
-            print(f"{name:28s} spp {spp:4d}  {t:7.2f} s  relMSE {rows[-1]['rel_mse']:.3e}")
-        results[name] = rows
+    results = {name: [] for name in renderers}
+    times = {name: [[] for _ in args.spps] for name in renderers}
+    for round_ in range(max(1, args.repeats)):
+        for name, run in renderers.items():
+            for i, spp in enumerate(args.spps):
+                img, t = _timed(lambda run=run, spp=spp, i=i: run(spp, 100 + i))
+                times[name][i].append(t)
+                if round_ == 0:
+                    results[name].append({"spp": spp, "rel_mse": rel_mse(img, reference),
+                                          "mean_rgb": img.mean(axis=(0, 1)).tolist()})  # fmt: skip
+    for name, rows in results.items():
+        for row, ts in zip(rows, times[name], strict=True):
+            row["seconds"], row["seconds_all"] = float(np.median(ts)), ts
+            spread = f"({min(ts):.2f}-{max(ts):.2f})"
+            print(f"{name:28s} spp {row['spp']:4d}  {row['seconds']:7.2f} s {spread:13s} "
+                  f"relMSE {row['rel_mse']:.3e}")  # fmt: skip
 
     base = "mitsuba scalar_spectral"
     target = next(r["rel_mse"] for r in results[base] if r["spp"] == args.target_spp)
