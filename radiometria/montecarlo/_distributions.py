@@ -104,13 +104,17 @@ _GUIDE_BYTES = 32 * 2**20  # the most a distribution's guide tables take
 class _Guide(eqx.Module):
     """Guide tables of a CDF (`_guide_tables`): `lower[r, k]` (`upper[r, k]`) is the largest
     `i` with `cdf[r, i] <= k/m - slack` (`+ slack`), so that the interval of any `u` in
-    `[j/m, (j+1)/m)` lies in `[lower[r, j], upper[r, j+1]]`, a bracket `steps` halvings close
-    and at most `span` cells wider than one."""
+    `[j/m, (j+1)/m)` lies in `[lower[r, j], upper[r, j+1]]`, at most `span` cells wider than
+    one and `steps` halvings close."""
 
     lower: Int[Array, "rows cuts"]  # int16 or int32; cuts = m + 1
     upper: Int[Array, "rows cuts"]
-    steps: int = eqx.field(static=True)
     span: int = eqx.field(static=True)
+
+    @property
+    def steps(self) -> int:
+        """Halvings that close the widest bracket."""
+        return math.ceil(math.log2(self.span + 1))
 
 
 def _guide_tables(cdf) -> "_Guide | None":
@@ -137,8 +141,7 @@ def _guide_tables(cdf) -> "_Guide | None":
 
     lower, upper = largest(k - _GUIDE_SLACK), largest(k + _GUIDE_SLACK)
     widest = int(np.max(upper[:, 1:].astype(np.int64) - lower[:, :-1]))
-    steps = math.ceil(math.log2(widest + 1))
-    return _Guide(jnp.asarray(lower), jnp.asarray(upper), steps, widest)
+    return _Guide(jnp.asarray(lower), jnp.asarray(upper), widest)
 
 
 def _unit_clip(x: Array) -> Array:
