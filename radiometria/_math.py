@@ -194,8 +194,7 @@ def compact_indices(mask: Array, size: int, fill_value: int) -> Array:
     n = mask.shape[0]
     b = _COMPACT_BLOCK
     blocks = -(-n // b)
-    a = jnp.zeros((blocks * b,), jnp.int32).at[:n].set(mask.astype(jnp.int32))
-    a = a.reshape(blocks, b)
+    a = jnp.pad(mask.astype(jnp.int32), (0, blocks * b - n)).reshape(blocks, b)
     totals = jnp.sum(a, axis=1, dtype=jnp.int32)
     before = jnp.cumsum(totals, dtype=jnp.int32) - totals
     slot = (jnp.cumsum(a, axis=1, dtype=jnp.int32) + before[:, None]).reshape(-1)[:n] - 1
@@ -244,10 +243,15 @@ def acos_fast(x: Array) -> Array:
     (float32: at most 3 ulps from float64 `arccos` plus the square root's rounding; 16 ns per
     element for XLA:CPU's `acos`)."""
     x = jnp.asarray(x)
-    return atan2_fast(jnp.sqrt(jnp.maximum((1.0 - x) * (1.0 + x), 0.0)), x)
+    return atan2_fast(_complement(x), x)
 
 
 def asin_fast(x: Array) -> Array:
     """`jnp.arcsin(x)` [rad] for `x` in [-1, 1], as `atan2_fast(x, sqrt((1 - x)(1 + x)))`."""
     x = jnp.asarray(x)
-    return atan2_fast(x, jnp.sqrt(jnp.maximum((1.0 - x) * (1.0 + x), 0.0)))
+    return atan2_fast(x, _complement(x))
+
+
+def _complement(x: Array) -> Array:
+    """`sqrt(1 - x^2)` as `sqrt((1 - x)(1 + x))`, which keeps its precision near |x| = 1."""
+    return jnp.sqrt(jnp.maximum((1.0 - x) * (1.0 + x), 0.0))
