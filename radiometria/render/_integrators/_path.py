@@ -355,19 +355,49 @@ def path_radiance(
 
     segments = jnp.arange(max_depth, dtype=jnp.int32)
     state, _ = jax.lax.scan(one_segment if compact else one_segment_all, state, segments)
-    # Only when some path escaped; and a branch's result is stored, so the lookup runs once
-    # per path instead of being fused into (and recomputed by) each consumer, such as the
-    # film's reduction of the k wavelengths to X, Y and Z (measured on the envmap benchmark:
-    # 12 ms per step of 65536 paths fused there).
+    return final_radiance(scene, state, wavelength_nm)
+
+
+def final_radiance(scene: RenderScene, state, wavelength_nm) -> Float[Array, "n k"]:
+    """The estimate of each path after its last segment: the radiance it gathered, plus
+    what the lights at infinity give the paths that escaped (`escaped_radiance`), with the
+    secondary wavelengths of paths through a dispersive interface dropped.
+
+    The escape's lookup runs only when some path escaped, and inside a `lax.cond`: a
+    branch's result is stored, so the lookup runs once per path instead of being fused into
+    (and recomputed by) each consumer, such as the film's reduction of the k wavelengths to
+    X, Y and Z (measured on the envmap benchmark: 12 ms per step of 65536 paths fused there).
+    A path that kept only its hero wavelength is the hero's estimate alone, weighted as one
+    wavelength out of k (pbrt's `TerminateSecondary`). Shared by `path` and `volpath`."""
     radiance = state.radiance + jax.lax.cond(
         jnp.any(state.escaped),
         lambda: escaped_radiance(scene, state, wavelength_nm),
         lambda: jnp.zeros_like(state.radiance),
     )
-    # A path through a dispersive interface kept only its hero wavelength: its estimate is the
-    # hero's alone, weighted as one wavelength out of k (pbrt's `TerminateSecondary`).
-    hero = jnp.zeros((1, k), dtype).at[0, 0].set(k)
+    k = radiance.shape[-1]
+    hero = jnp.zeros((1, k), radiance.dtype).at[0, 0].set(k)
     return jnp.where(state.hero_only[:, None], radiance[:, :1] * hero, radiance)
+
+
+def record_escape(new, escaped, d, beta, pdf, specular):
+    """`new` (the state after a segment) with the paths flagged `escaped` keeping the
+    direction `d`, throughput `beta`, BSDF density `pdf` and delta flag `specular` of the
+    segment they escaped along, and flagged `escaped` (for `escaped_radiance`)."""
+
+    def at_escape(x, old):
+        return jnp.where(escaped.reshape(escaped.shape + (1,) * (x.ndim - 1)), old, x)
+
+    return eqx.tree_at(
+        lambda s: (s.d, s.beta, s.pdf, s.specular, s.escaped),
+        new,
+        (
+            at_escape(new.d, d),
+            at_escape(new.beta, beta),
+            at_escape(new.pdf, pdf),
+            at_escape(new.specular, specular),
+            new.escaped | escaped,
+        ),
+    )
 
 
 def escaped_radiance(scene: RenderScene, state, wavelength_nm) -> Float[Array, "n k"]:
@@ -457,21 +487,7 @@ def _segment(
             ),
             lambda: eqx.tree_at(lambda s: s.alive, state, jnp.zeros_like(state.alive)),
         )
-
-    def at_escape(x, old):
-        return jnp.where(escaped.reshape(escaped.shape + (1,) * (x.ndim - 1)), old, x)
-
-    return eqx.tree_at(
-        lambda s: (s.d, s.beta, s.pdf, s.specular, s.escaped),
-        new,
-        (
-            at_escape(new.d, pre.d),
-            at_escape(new.beta, pre.beta),
-            at_escape(new.pdf, pre.pdf),
-            at_escape(new.specular, pre.specular),
-            new.escaped | escaped,
-        ),
-    )
+    return record_escape(new, escaped, pre.d, pre.beta, pre.pdf, pre.specular)
 
 
 class ShadingFrame(eqx.Module):

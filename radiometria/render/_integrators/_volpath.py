@@ -85,6 +85,8 @@ from ._path import (
     _offset,
     _Vertex,
     _vertex,
+    final_radiance,
+    record_escape,
     shading_frame,
     shadow_ray,
 )
@@ -194,6 +196,9 @@ class _VolState(eqx.Module):
     medium: Array  # int32 (n,): the medium `d` travels in (-1: vacuum)
     mis: Array  # (n, k): path-level spectral MIS ratios P_j / mean_i P_i (module docstring)
     channel: Array  # int32 (n,): the wavelength index free flights are sampled at ("path")
+    # bool (n,): the path left the scene; `d`, `beta`, `pdf` and `specular` stay those of the
+    # escaping segment (`beta` with the walk's free-flight weights), for `escaped_radiance`.
+    escaped: Array
 
 
 class _Walk(eqx.Module):
@@ -238,7 +243,10 @@ def _bounded_loop(body, init, n: int, differentiable: bool, pending):
 def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hide_emitters,
           spectral_mis):  # fmt: skip
     """Trace segment `b` from each path's vertex through null surfaces to the next real
-    vertex (a medium interaction or a surface), gathering emission on the way."""
+    vertex (a medium interaction or a surface), gathering the emission of surfaces on the
+    way. A walk that leaves the scene ends with none of `pending`, `event` and `surface`
+    set; its lights at infinity are looked up once per path after the last segment
+    (`_path.final_radiance`), not here for every walking lane."""
     n = state.o.shape[0]
     dtype = state.o.dtype
     media = scene.media
@@ -287,18 +295,13 @@ def _walk(scene, state, wavelength_nm, u_med, b, *, max_null, differentiable, hi
             t_event = mi.t
         through = w.pending & ~event
         hit = through & v.valid
-        escaped = through & ~v.valid
         null_hit = hit & null_mat[scene.face_material[v.face]]
-        # Emission where the walk meets a surface or leaves the scene, weighted by MIS against
-        # next-event estimation from the segment's vertex (distance dist + t from it).
+        # Emission where the walk meets a surface, weighted by MIS against next-event
+        # estimation from the segment's vertex (distance dist + t from it).
         le = scene.light.emitted(v.face, v.cos_o, hit, wavelength_nm, v.uv)
         pdf_light = scene.light.pdf_li(v.face, w.dist + v.t, v.cos_o, state.o)
         mis = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_light))
         gathered = jnp.where((hit & show)[:, None], beta * le * mis[:, None], 0.0)
-        le_esc = scene.light.emitted_escaped(d, escaped, wavelength_nm)
-        pdf_esc = scene.light.pdf_escaped(d)
-        mis_esc = jnp.where(state.specular, 1.0, power_heuristic(1, state.pdf, 1, pdf_esc))
-        gathered += jnp.where((escaped & show)[:, None], beta * le_esc * mis_esc[:, None], 0.0)
         medium = w.medium
         if scene.media is not None:
             medium = jnp.where(null_hit, _crossed(scene, v.face, v.n, d, w.medium), w.medium)
@@ -472,6 +475,7 @@ def _scatter(scene, state, walk: _Walk, wavelength_nm, u_b, seed_u, roulette, *,
         medium=medium,
         mis=walk.mis,
         channel=state.channel,
+        escaped=state.escaped,
     )
 
 
@@ -500,22 +504,29 @@ def _segment(scene, state, wavelength_nm, sample, b, *, max_depth, rr_depth, hid
         scene, state, wavelength_nm, u_med, b, max_null=max_null,
         differentiable=differentiable, hide_emitters=hide_emitters, spectral_mis=spectral_mis,
     )  # fmt: skip
+    # A walk that left the scene (ended on neither a surface nor a medium interaction, and
+    # not cut short by `max_null`) keeps this segment's direction, density and throughput.
+    escaped = alive & ~walk.pending & ~walk.event & ~walk.surface
+    if hide_emitters:
+        escaped = escaped & (b > 0)
     ended = eqx.tree_at(
         lambda s: (s.radiance, s.alive, s.beta, s.medium, s.mis),
         state,
         (walk.radiance, jnp.zeros_like(alive), walk.beta, walk.medium, walk.mis),
     )
     if max_depth == 1:
-        return ended
-    state = eqx.tree_at(lambda s: s.alive, state, alive & (walk.event | walk.surface))
-    return jax.lax.cond(
-        b < max_depth - 1,
-        lambda: _scatter(
-            scene, state, walk, wavelength_nm, u_surface, u_med[:, 1],
-            roulette=b >= rr_depth - 1, max_null=max_null, differentiable=differentiable,
-        ),
-        lambda: ended,
-    )  # fmt: skip
+        new = ended
+    else:
+        state = eqx.tree_at(lambda s: s.alive, state, alive & (walk.event | walk.surface))
+        new = jax.lax.cond(
+            b < max_depth - 1,
+            lambda: _scatter(
+                scene, state, walk, wavelength_nm, u_surface, u_med[:, 1],
+                roulette=b >= rr_depth - 1, max_null=max_null, differentiable=differentiable,
+            ),
+            lambda: ended,
+        )  # fmt: skip
+    return record_escape(new, escaped, state.d, walk.beta, state.pdf, state.specular)
 
 
 def volpath_radiance(
@@ -618,6 +629,7 @@ def volpath_radiance(
         medium=jnp.full((n_rays,), scene.camera_medium, jnp.int32),
         mis=jnp.ones((n_rays, k), dtype),
         channel=jnp.zeros((n_rays,), jnp.int32),
+        escaped=jnp.zeros((n_rays,), bool),
     )
 
     def segment(state, wavelength_nm, paths, b):
@@ -631,8 +643,7 @@ def volpath_radiance(
     state = run_segments(
         state, segment, wavelength_nm, n_segments=max_depth, chunk=chunk, compact=compact
     )
-    hero = jnp.zeros((1, k), dtype).at[0, 0].set(k)
-    return jnp.where(state.hero_only[:, None], state.radiance[:, :1] * hero, state.radiance)
+    return final_radiance(scene, state, wavelength_nm)
 
 
 class VolPath(AbstractIntegrator):
