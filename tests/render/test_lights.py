@@ -235,9 +235,7 @@ def test_volumetric_furnace_under_a_constant_sky(tmp_path, integrator, sigma, sa
     # per-segment spectral MIS on the chromatic fog has rare fireflies: 35 standard
     # deviations once in 6 images, unbiased but too heavy-tailed for a per-pixel bound.)
     fog = _FOG.format(kind="rgb" if "," in sigma else "float", sigma=sigma)
-    integ = (
-        f'<integrator type="{integrator}"><integer name="max_depth" value="64"/></integrator>'
-    )
+    integ = f'<integrator type="{integrator}"><integer name="max_depth" value="64"/></integrator>'
     text = _scene(_SKY, integrator=integrator, plane=False, extra=fog + _FOG_SPHERE)
     text = text.replace(f'<integrator type="{integrator}"/>', integ)
     image = _render(_write(tmp_path, text), spp=64)
