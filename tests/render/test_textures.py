@@ -22,7 +22,12 @@ from PIL import Image
 from radiometria.render import RenderScene, SceneError, load_scene
 from radiometria.render._integrators._path import path_radiance, sample_dimensions
 from radiometria.render._materials import Diffuse, MaterialSet
-from radiometria.render._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
+from radiometria.render._spectral import (
+    LinearRGB,
+    SpectrumTable,
+    sigmoid_texel_spectra,
+    tabulate_spectrum,
+)
 from radiometria.render._textures import (
     BitmapTexture,
     CheckerboardTexture,
@@ -32,7 +37,12 @@ from radiometria.render._textures import (
     concatenate_textures,
     read_texture_image,
 )
-from radiometria.upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum, get_lut
+from radiometria.upsampling import (
+    RGBAlbedoSpectrum,
+    RGBIlluminantSpectrum,
+    get_lut,
+    sigmoid_polynomial_jakob2019,
+)
 
 from ..helpers import fuzz_settings, mutate_bytes
 
@@ -103,6 +113,21 @@ def test_black_and_white_texels_interpolate_without_nans():
     # The table's coefficients of black and white are infinite; spectra are interpolated.
     tex = BitmapTexture.from_rgb(np.array([[[0.0] * 3, [1.0] * 3]]), dtype=jnp.float64)
     np.testing.assert_allclose(_lookup(tex, [(0.5, 0.5)]), 0.5, atol=1e-12)
+
+
+def test_texel_spectra_wavelengths_first_equal_the_model():
+    # `sigmoid_texel_spectra` ((k, n), coefficient planes) against the upsampling module's
+    # own evaluation of each gathered texel; black and white texels' infinite coefficients
+    # give exactly 0 and 1.
+    rng = np.random.default_rng(4)
+    rgb = np.concatenate([rng.uniform(0.02, 0.98, (10, 3)), [[0.0] * 3, [1.0] * 3]])
+    coeffs = np.asarray(get_lut("sRGB").coefficients(jnp.asarray(rgb)), np.float64)  # (12, 3)
+    texel = rng.integers(0, 12, 50)
+    wl = rng.uniform(360.0, 830.0, (50, 4))
+    out = sigmoid_texel_spectra(jnp.asarray(coeffs.T), jnp.asarray(texel), jnp.asarray(wl.T))
+    expected = sigmoid_polynomial_jakob2019(jnp.asarray(coeffs[texel]), jnp.asarray(wl))
+    np.testing.assert_allclose(np.asarray(out).T, np.asarray(expected), rtol=1e-12, atol=0)
+    assert set(np.unique(np.asarray(out)[:, texel >= 10])) <= {0.0, 1.0}
 
 
 def test_checkerboard_against_hand_parity():

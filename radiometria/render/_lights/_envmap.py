@@ -31,9 +31,8 @@ from ...upsampling import (
     RGBIlluminantSpectrum,
     forward_model,
     get_lut,
-    sigmoid_polynomial_jakob2019,
 )
-from .._spectral import SpectrumTable, wavelength_grid_nm
+from .._spectral import SpectrumTable, sigmoid_texel_spectra, wavelength_grid_nm
 from ._base import LightSample, emission_at_infinity
 from ._common import AbstractSurfacelessLight, to_world_param
 
@@ -94,8 +93,9 @@ class EnvironmentLight(AbstractSurfacelessLight):
 
     **Fields:**
 
-    - `coeffs`: `(H, W + 1, 3)` sigmoid-polynomial coefficients of each texel's colour
-        (column `W` repeats column 0, for the periodic seam). [nm^-2, nm^-1, 1]
+    - `coeffs`: `(3, H, W + 1)` sigmoid-polynomial coefficients of each texel's colour,
+        one plane per coefficient (column `W` repeats column 0, for the periodic seam).
+        [nm^-2, nm^-1, 1]
     - `texel_scale`: `(H, W + 1)` each texel's brightness $2\max(\mathrm{rgb})$ times `scale`.
     - `d65`: `SpectrumTable`, the D65 illuminant with Y = 1. [1]
     - `distribution`: `PiecewiseConstant2D` over the `(H - 1, W)` cells.
@@ -114,7 +114,7 @@ class EnvironmentLight(AbstractSurfacelessLight):
 
     NAME: ClassVar[str] = "envmap"
     PARAMETERS: ClassVar[frozenset[str]] = frozenset({"filename", "scale", "to_world"})
-    coeffs: Float[Array, "h w1 3"]
+    coeffs: Float[Array, "3 h w1"]
     texel_scale: Float[Array, "h w1"]
     d65: SpectrumTable
     distribution: PiecewiseConstant2D
@@ -176,7 +176,7 @@ class EnvironmentLight(AbstractSurfacelessLight):
         if not np.any(table > 0):
             table = np.ones_like(table)  # a black map: never sampled (its power is 0)
         return cls(
-            coeffs=jnp.asarray(coeffs, dtype),
+            coeffs=jnp.asarray(np.moveaxis(coeffs, -1, 0), dtype),
             texel_scale=jnp.asarray(texel_scale, dtype),
             d65=SpectrumTable(jnp.asarray(d65[None, :], dtype)),
             distribution=PiecewiseConstant2D(jnp.asarray(table, dtype)),
@@ -209,31 +209,34 @@ class EnvironmentLight(AbstractSurfacelessLight):
     @property
     def shape(self) -> tuple[int, int]:
         """`(H, W)` of the image."""
-        return int(self.coeffs.shape[0]), int(self.coeffs.shape[1]) - 1
+        return int(self.coeffs.shape[1]), int(self.coeffs.shape[2]) - 1
 
     def radiance_uv(self, uv: Float[Array, "n 2"], wavelength_nm: Float[Array, "n k"]):
-        """Radiance at image coordinates `uv` in [0, 1)^2 (Mitsuba's bilinear lookup).
+        """Radiance at image coordinates `uv` in [0, 1)^2 (Mitsuba's bilinear lookup: the
+        four texels' spectra and scales interpolated separately; `sigmoid_texel_spectra`).
         [W m^-2 sr^-1 nm^-1]"""
         h, w = self.shape
         x = jnp.mod(uv[:, 0] - 0.5 / w, 1.0) * w
         y = jnp.clip(uv[:, 1], 0.0, 1.0) * (h - 1)
         ix = jnp.clip(jnp.floor(x).astype(jnp.int32), 0, w - 1)
         iy = jnp.clip(jnp.floor(y).astype(jnp.int32), 0, h - 2)
-        wx = (x - ix.astype(x.dtype))[:, None]
-        wy = (y - iy.astype(y.dtype))[:, None]
-
-        def texel(r, c):
-            s = sigmoid_polynomial_jakob2019(self.coeffs[r, c], wavelength_nm)
-            return s.astype(wavelength_nm.dtype), self.texel_scale[r, c][:, None]
-
-        s00, f00 = texel(iy, ix)
-        s01, f01 = texel(iy, ix + 1)
-        s10, f10 = texel(iy + 1, ix)
-        s11, f11 = texel(iy + 1, ix + 1)
-        s = (1 - wy) * ((1 - wx) * s00 + wx * s01) + wy * ((1 - wx) * s10 + wx * s11)
-        f = (1 - wy) * ((1 - wx) * f00 + wx * f01) + wy * ((1 - wx) * f10 + wx * f11)
+        wx = x - ix.astype(x.dtype)
+        wy = y - iy.astype(y.dtype)
+        coeffs = self.coeffs.reshape(3, -1)
+        texel_scale = self.texel_scale.reshape(-1)
+        lam = wavelength_nm.T
+        row = iy * (w + 1) + ix
+        s, f = 0.0, 0.0
+        for texel, weight in (
+            (row, (1 - wy) * (1 - wx)),
+            (row + 1, (1 - wy) * wx),
+            (row + w + 1, wy * (1 - wx)),
+            (row + w + 2, wy * wx),
+        ):
+            s = s + weight[None, :] * sigmoid_texel_spectra(coeffs, texel, lam)
+            f = f + weight * texel_scale[texel]
         d65 = self.d65(jnp.zeros(uv.shape[:1], jnp.int32), wavelength_nm)
-        return s * f * d65
+        return (s * f[None, :]).T.astype(wavelength_nm.dtype) * d65
 
     def _uv(self, directions):
         local = directions @ self.world_to_local.T
