@@ -3,7 +3,7 @@
 Mitsuba 3 and pbrt-v4 intersect a `sphere` shape exactly; a tessellation lies inside the true
 sphere (by 1.1e-3 of the radius for the loader's mesh) and costs thousands of triangles in the
 BVH. `Spheres` holds a few true spheres as arrays and answers the two ray queries by testing
-every ray against every sphere, vectorised as `(n, k)` arrays (k is small: the renderer keeps
+every ray against every sphere, vectorised as `(k, n)` arrays (k is small: the renderer keeps
 this for scenes with at most `MAX_ANALYTIC_SPHERES` spheres). The test is the quadratic of
 Haines, Guenther & Akenine-Moeller (2019), which keeps float32 accurate for rays that start
 far from the sphere (the discriminant from the ray's closest approach to the centre, the two
@@ -31,13 +31,20 @@ a scene with more keeps their tessellations in its BVH."""
 
 def _roots(f, d, radius):
     """The two ray parameters `(t0 <= t1)` where `o + t d` meets the sphere (`f = o - c`),
-    and whether the ray meets it at all (Haines et al. 2019, eqs. 7.5-7.8). Broadcasts."""
-    a = dot(d, d)
-    b = dot(f, d)  # half the linear coefficient
-    c = dot(f, f) - radius * radius
+    and whether the ray meets it at all (Haines et al. 2019, eqs. 7.5-7.8).
+
+    `f` and `d` are triples of components `(x, y, z)`, each an array (`(k, n)` and `(1, n)`
+    in `Spheres._t`: spheres by rays, the rays along the last axis, which XLA:CPU
+    vectorises; written on `(n, k, 3)` arrays the same test took 40 against 5 ns per ray
+    for k = 2, and 122 against 41 ns for k = 8, 2048 float32 rays on one core); `radius`
+    broadcasts against them."""
+    a = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    b = f[0] * d[0] + f[1] * d[1] + f[2] * d[2]  # half the linear coefficient
+    c = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] - radius * radius
     # Discriminant / (4 a) from the closest approach of the line to the centre.
-    closest = f - (b / a)[..., None] * d
-    disc = radius * radius - dot(closest, closest)
+    ba = b / a
+    closest = [fi - ba * di for fi, di in zip(f, d, strict=True)]
+    disc = radius * radius - sum(g * g for g in closest)
     root = jnp.sqrt(jnp.maximum(a * disc, 0.0))
     q = -(b + jnp.where(b >= 0, root, -root))
     q_safe = jnp.where(q == 0, 1.0, q)
@@ -116,11 +123,13 @@ class Spheres(eqx.Module):
         )
 
     def _t(self, origins, directions, t_max):
-        """`(n, k)` the first ray parameter in `(0, t_max)` on each sphere, inf where none."""
-        f = origins[:, None, :] - self.center[None]
-        t0, t1, meets = _roots(f, directions[:, None, :], self.radius[None])
+        """`(k, n)` the first ray parameter in `(0, t_max)` on each sphere, inf where none
+        (spheres by rays: `_roots`)."""
+        f = [origins[:, i][None, :] - self.center[:, i][:, None] for i in range(3)]
+        d = [directions[:, i][None, :] for i in range(3)]
+        t0, t1, meets = _roots(f, d, self.radius[:, None])
         t = jnp.where(t0 > 0, t0, t1)
-        return jnp.where(meets & (t > 0) & (t < t_max[:, None]), t, jnp.inf)
+        return jnp.where(meets & (t > 0) & (t < t_max[None, :]), t, jnp.inf)
 
     def intersect_closest(
         self,
@@ -141,8 +150,8 @@ class Spheres(eqx.Module):
         into the fields (-1 for none).
         """
         t = self._t(origins, directions, t_max)
-        index = jnp.argmin(t, axis=1).astype(jnp.int32)
-        t_hit = jnp.min(t, axis=1)
+        index = jnp.argmin(t, axis=0).astype(jnp.int32)
+        t_hit = jnp.min(t, axis=0)
         return t_hit, jnp.where(jnp.isfinite(t_hit), index, -1)
 
     def intersect_any(
@@ -153,7 +162,7 @@ class Spheres(eqx.Module):
     ) -> Bool[Array, " n"]:
         """Whether a sphere lies on each ray segment `0 < t < t_max` (arguments as in
         `intersect_closest`)."""
-        return jnp.any(jnp.isfinite(self._t(origins, directions, t_max)), axis=1)
+        return jnp.any(jnp.isfinite(self._t(origins, directions, t_max)), axis=0)
 
     def normal(self, index: Int[Array, " n"], p: Float[Array, "n 3"]) -> Float[Array, "n 3"]:
         """The outward unit normal of sphere `index` at (or nearest to) the points `p`."""

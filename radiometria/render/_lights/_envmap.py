@@ -215,9 +215,15 @@ class EnvironmentLight(AbstractSurfacelessLight):
         """Radiance at image coordinates `uv` in [0, 1)^2 (Mitsuba's bilinear lookup: the
         four texels' spectra and scales interpolated separately; `sigmoid_texel_spectra`).
         [W m^-2 sr^-1 nm^-1]"""
+        return self._radiance(uv[:, 0], uv[:, 1], wavelength_nm)
+
+    def _radiance(self, u, v, wavelength_nm):
+        """`radiance_uv` of the coordinates as two `(n,)` arrays (never stacked: XLA:CPU
+        computes a fusion whose result is `(n, 2)` one element at a time, with everything
+        fused into it, such as the `atan2` of `_uv`)."""
         h, w = self.shape
-        x = jnp.mod(uv[:, 0] - 0.5 / w, 1.0) * w
-        y = jnp.clip(uv[:, 1], 0.0, 1.0) * (h - 1)
+        x = jnp.mod(u - 0.5 / w, 1.0) * w
+        y = jnp.clip(v, 0.0, 1.0) * (h - 1)
         ix = jnp.clip(jnp.floor(x).astype(jnp.int32), 0, w - 1)
         iy = jnp.clip(jnp.floor(y).astype(jnp.int32), 0, h - 2)
         wx = x - ix.astype(x.dtype)
@@ -235,16 +241,21 @@ class EnvironmentLight(AbstractSurfacelessLight):
         ):
             s = s + weight[None, :] * sigmoid_texel_spectra(coeffs, texel, lam)
             f = f + weight * texel_scale[texel]
-        d65 = self.d65(jnp.zeros(uv.shape[:1], jnp.int32), wavelength_nm)
+        d65 = self.d65(jnp.zeros(u.shape, jnp.int32), wavelength_nm)
         return (s * f[None, :]).T.astype(wavelength_nm.dtype) * d65
 
     def _uv(self, directions):
-        local = directions @ self.world_to_local.T
-        local = local / jnp.sqrt(jnp.maximum(dot(local, local), 1e-30))[:, None]
-        u = jnp.mod(atan2_fast(local[:, 0], -local[:, 2]) / (2.0 * np.pi), 1.0)
-        v = acos_fast(jnp.clip(local[:, 1], -1.0, 1.0)) / np.pi
-        sin_theta = jnp.sqrt(local[:, 0] ** 2 + local[:, 2] ** 2)
-        return jnp.stack([u, v], axis=-1), sin_theta
+        """Image coordinates `u`, `v` `(n,)` of world directions, and `sin(theta)`."""
+        m = self.world_to_local
+        x, y, z = (
+            m[i, 0] * directions[:, 0] + m[i, 1] * directions[:, 1] + m[i, 2] * directions[:, 2]
+            for i in range(3)
+        )
+        length = jnp.sqrt(jnp.maximum(x * x + y * y + z * z, 1e-30))
+        x, y, z = x / length, y / length, z / length
+        u = jnp.mod(atan2_fast(x, -z) / (2.0 * np.pi), 1.0)
+        v = acos_fast(jnp.clip(y, -1.0, 1.0)) / np.pi
+        return u, v, jnp.sqrt(x * x + z * z)
 
     def _pdf_uv_to_solid_angle(self, pdf_uv, sin_theta):
         eps = jnp.finfo(sin_theta.dtype).eps
@@ -263,7 +274,7 @@ class EnvironmentLight(AbstractSurfacelessLight):
         )
         wi = local @ self.to_world.T
         wi = wi / jnp.sqrt(dot(wi, wi))[:, None]
-        le = self.radiance_uv(jnp.stack([u, v], axis=-1), wavelength_nm)
+        le = self._radiance(u, v, wavelength_nm)
         return LightSample(
             wi=wi.astype(p.dtype),
             dist=jnp.full((n,), jnp.inf, p.dtype),
@@ -273,14 +284,14 @@ class EnvironmentLight(AbstractSurfacelessLight):
         )
 
     def emitted_escaped(self, directions, escaped, wavelength_nm):
-        uv, _ = self._uv(directions)
-        le = self.radiance_uv(uv, wavelength_nm).astype(directions.dtype)
+        u, v, _ = self._uv(directions)
+        le = self._radiance(u, v, wavelength_nm).astype(directions.dtype)
         return jnp.where(escaped[:, None], le, 0.0)
 
     def pdf_escaped(self, directions):
-        uv, sin_theta = self._uv(directions)
+        u, v, sin_theta = self._uv(directions)
         w = self.shape[1]
-        cell_uv = jnp.stack([jnp.mod(uv[:, 0] - 0.5 / w, 1.0), uv[:, 1]], axis=-1)
+        cell_uv = jnp.stack([jnp.mod(u - 0.5 / w, 1.0), v], axis=-1)
         pdf = self._pdf_uv_to_solid_angle(self.distribution.pdf(cell_uv), sin_theta)
         return pdf.astype(directions.dtype)
 
