@@ -83,6 +83,7 @@ from ._warps import (
     sample_uniform_sphere as sample_uniform_sphere,
     sample_uniform_triangle as sample_uniform_triangle,
     sample_visible_wavelengths as sample_visible_wavelengths,
+    sample_visible_wavelengths_with_pdf as sample_visible_wavelengths_with_pdf,
     spherical_triangle_area as spherical_triangle_area,
     spherical_triangle_pdf as spherical_triangle_pdf,
     tent_pdf as tent_pdf,

@@ -25,7 +25,7 @@ import numpy as np
 from jaxtyping import Array, Float, Int
 
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
-from ..montecarlo import sample_visible_wavelengths, visible_wavelengths_pdf
+from ..montecarlo import sample_visible_wavelengths_with_pdf
 from ..radiometry import AbstractSpectrum, PiecewiseLinearSpectrum
 from ..upsampling import (
     RGBAlbedoSpectrum,
@@ -161,11 +161,14 @@ def sample_hero_wavelengths(u: Float[Array, "*batch"]) -> tuple[Array, Array]:
     ??? cite "References"
         `Wilkie2014` (hero wavelength spectral sampling); `Pharr2023` §4.6.2, §5.4.2.
     """
+    # Computed wavelengths first, (4, ...), and moved last at the end: XLA:CPU vectorises
+    # along the last axis only.
     shift = jnp.arange(N_HERO_WAVELENGTHS, dtype=u.dtype) / N_HERO_WAVELENGTHS
-    ui = u[..., None] + shift.reshape((1,) * u.ndim + (N_HERO_WAVELENGTHS,))
+    ui = u[None] + shift.reshape((N_HERO_WAVELENGTHS,) + (1,) * u.ndim)
     ui = jnp.where(ui >= 1.0, ui - 1.0, ui)
-    wavelength_nm = sample_visible_wavelengths(ui, check=False)  # u is ours: in [0, 1)
-    return wavelength_nm, visible_wavelengths_pdf(wavelength_nm)
+    # u is ours: in [0, 1)
+    wavelength_nm, pdf = sample_visible_wavelengths_with_pdf(ui, check=False)
+    return jnp.moveaxis(wavelength_nm, 0, -1), jnp.moveaxis(pdf, 0, -1)
 
 
 # --- Scene parameters tabulated on the renderer's grid ---------------------------------------

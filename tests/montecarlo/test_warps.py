@@ -230,6 +230,20 @@ def test_visible_wavelengths_match_pbrt_constants():
     assert float(mc.visible_wavelengths_pdf(830.1)) == 0.0
 
 
+def test_visible_wavelengths_with_pdf_equal_the_two_functions():
+    # One inversion gives the sample and its density through 1 / cosh^2(atanh t) = 1 - t^2:
+    # equal to sample_visible_wavelengths and visible_wavelengths_pdf evaluated at it.
+    u = jnp.concatenate([jnp.asarray([0.0, 0.5, 1.0 - 2**-40]), jnp.linspace(0.0, 1.0, 997)[:-1]])
+    lam, pdf = mc.sample_visible_wavelengths_with_pdf(u)
+    np.testing.assert_array_equal(np.asarray(lam), np.asarray(mc.sample_visible_wavelengths(u)))
+    np.testing.assert_allclose(pdf, mc.visible_wavelengths_pdf(lam), rtol=1e-12, atol=0)
+    lam32, pdf32 = mc.sample_visible_wavelengths_with_pdf(u[3:].astype(jnp.float32))
+    assert lam32.dtype == pdf32.dtype == jnp.float32
+    np.testing.assert_allclose(pdf32, mc.visible_wavelengths_pdf(lam[3:]), rtol=2e-5)
+    with pytest.raises(Exception, match="u"):
+        mc.sample_visible_wavelengths_with_pdf(jnp.asarray([1.5]))
+
+
 def test_heuristics_values_and_edges():
     assert mc.balance_heuristic(1, 2.0, 1, 2.0) == pytest.approx(0.5)
     assert mc.power_heuristic(1, 3.0, 1, 1.0) == pytest.approx(0.9)

@@ -169,9 +169,7 @@ class EmitterBounds(eqx.Module):
         axis = [self.axis[:, i][:, None] for i in range(3)]
         d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
         dist = jnp.sqrt(d2)
-        cos_w = (v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2]) / jnp.where(
-            dist > 0, dist, 1.0
-        )
+        cos_w = (v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2]) / jnp.where(dist > 0, dist, 1.0)
         cos_w = jnp.where(self.two_sided[:, None], jnp.abs(cos_w), cos_w)
         theta_w = acos_fast(jnp.clip(cos_w, -1.0, 1.0))
         r = self.radius[:, None]
