@@ -12,8 +12,9 @@ from ...upsampling import (
     RGBIlluminantSpectrum,
     RGBUnboundedSpectrum,
     get_lut,
+    sigmoid_polynomial_jakob2019,
 )
-from .._spectral import LinearRGB, SpectrumTable, sigmoid_texel_spectra, tabulate_spectrum
+from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
 from ._base import AbstractTexture
 
 __all__ = ["FILTER_TYPES", "WRAP_MODES", "BitmapTexture", "uv_transform"]
@@ -57,8 +58,7 @@ class BitmapTexture(AbstractTexture):
 
     **Fields:**
 
-    - `coeffs`: `(3, h, w)` nm coefficients of each texel, one plane per coefficient
-        (`sigmoid_texel_spectra`).
+    - `coeffs`: `(h, w, 3)` nm coefficients of each texel (`sigmoid_polynomial_jakob2019`).
     - `scale`: `(h, w)` factor of each texel's spectrum (2 max(rgb) for unbounded and
         illuminant spectra, 1 for reflectances). [the parameter's unit]
     - `illuminant`: `None`, or a one-row `SpectrumTable` of the normalised D65 illuminant
@@ -76,7 +76,7 @@ class BitmapTexture(AbstractTexture):
     """
 
     NAME: ClassVar[str] = "bitmap"
-    coeffs: Float[Array, "3 h w"]
+    coeffs: Float[Array, "h w 3"]
     scale: Float[Array, "h w"]
     illuminant: SpectrumTable | None
     to_uv: Float[Array, "3 3"]
@@ -134,7 +134,7 @@ class BitmapTexture(AbstractTexture):
             d65 = tabulate_spectrum(LinearRGB([1.0, 1.0, 1.0]), RGBIlluminantSpectrum)
             illuminant = SpectrumTable(jnp.asarray(d65[None], dtype))
         return cls(
-            coeffs=jnp.asarray(np.moveaxis(coeffs, -1, 0), dtype),
+            coeffs=jnp.asarray(coeffs, dtype),
             scale=jnp.asarray(scale, dtype),
             illuminant=illuminant,
             to_uv=jnp.asarray(uv_transform(to_uv), dtype),
@@ -149,7 +149,7 @@ class BitmapTexture(AbstractTexture):
     @property
     def resolution(self) -> tuple[int, int]:
         """`(width, height)` in texels."""
-        return int(self.coeffs.shape[2]), int(self.coeffs.shape[1])
+        return int(self.coeffs.shape[1]), int(self.coeffs.shape[0])
 
     def __call__(
         self,
@@ -163,29 +163,24 @@ class BitmapTexture(AbstractTexture):
         u = self.to_uv[0, 0] * uv[..., 0] + self.to_uv[0, 1] * uv[..., 1] + self.to_uv[0, 2]
         v = self.to_uv[1, 0] * uv[..., 0] + self.to_uv[1, 1] * uv[..., 1] + self.to_uv[1, 2]
         w, h = self.resolution
-        coeffs = self.coeffs.reshape(3, -1)
-        scale = self.scale.reshape(-1)
-        lam = wavelength_nm.T  # the blend runs wavelengths first (`sigmoid_texel_spectra`)
 
-        def texel(i, j, weight=None):
-            t = _wrap(j, h, self.wrap_mode) * w + _wrap(i, w, self.wrap_mode)
-            f = scale[t] if weight is None else weight * scale[t]
-            return f[None, :] * sigmoid_texel_spectra(coeffs, t, lam)
+        def texel(i, j):
+            i = _wrap(i, w, self.wrap_mode)
+            j = _wrap(j, h, self.wrap_mode)
+            c = self.coeffs[j, i]
+            value = sigmoid_polynomial_jakob2019(c, wavelength_nm.astype(c.dtype))
+            return value * self.scale[j, i][..., None]
 
         if self.filter_type == "nearest":
             out = texel(jnp.floor(u * w).astype(jnp.int32), jnp.floor(v * h).astype(jnp.int32))
         else:
             x, y = u * w - 0.5, v * h - 0.5
             x0, y0 = jnp.floor(x), jnp.floor(y)
-            wx, wy = x - x0, y - y0
+            wx, wy = (x - x0)[..., None], (y - y0)[..., None]
             i, j = x0.astype(jnp.int32), y0.astype(jnp.int32)
-            out = (
-                texel(i, j, (1 - wy) * (1 - wx))
-                + texel(i + 1, j, (1 - wy) * wx)
-                + texel(i, j + 1, wy * (1 - wx))
-                + texel(i + 1, j + 1, wy * wx)
-            )
-        out = out.T
+            top = (1 - wx) * texel(i, j) + wx * texel(i + 1, j)
+            bottom = (1 - wx) * texel(i, j + 1) + wx * texel(i + 1, j + 1)
+            out = (1 - wy) * top + wy * bottom
         if self.illuminant is not None:
             out = out * self.illuminant(jnp.zeros(out.shape[:-1], jnp.int32), wavelength_nm)
         return out.astype(wavelength_nm.dtype)
