@@ -25,11 +25,13 @@ from the single-sample mixture over the path's wavelengths (spectral MIS with th
 heuristic, `Wilkie2014`; pbrt-v4's `VolPathIntegrator`), whose weights keep every wavelength
 unbiased, so chromatic media need no hero-only fallback; grids use weighted delta tracking.
 A sampled interaction becomes a medium vertex (the albedo is carried in the weight, absorption
-is not sampled as a path end); otherwise the ray reaches the next surface (or escapes), where
-emission is gathered. Shadow rays of next-event estimation pass through `null` surfaces in
-the same way, multiplying the transmittance of each piece (exact for homogeneous media, ratio
-tracking for grids); any other surface blocks them. A surface with `interior`/`exterior`
-indices and a real BSDF (a dielectric) changes the medium when a sampled direction crosses it.
+is not sampled as a path end); otherwise the ray reaches the next surface, where emission is
+gathered, or escapes, and the lights at infinity are looked up once per path after the last
+segment with that segment's throughput and densities (`_path.final_radiance`). Shadow rays
+of next-event estimation pass through `null` surfaces in the same way, multiplying the
+transmittance of each piece (exact for homogeneous media, ratio tracking for grids); any other
+surface blocks them. A surface with `interior`/`exterior` indices and a real BSDF (a
+dielectric) changes the medium when a sampled direction crosses it.
 
 **Spectral MIS.** A path carries `k` wavelengths but samples one distance per free flight;
 how the `k` per-wavelength densities $p_j$ of that sample are combined is `spectral_mis`
