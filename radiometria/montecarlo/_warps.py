@@ -1058,8 +1058,8 @@ def sample_visible_wavelengths_with_pdf(u: FloatLike, *, check: bool = True) -> 
 
     **Returns:**
 
-    `(wavelength_nm, pdf)`: wavelengths in [360, 830] [nm] and `visible_wavelengths_pdf` at
-    them [nm^-1], each of `u`'s shape.
+    `(wavelength_nm, pdf)`, each of `u`'s shape: the wavelengths, in 360-830 nm [nm], and
+    `visible_wavelengths_pdf` at them [nm^-1].
 
     ??? cite "References"
         `Pharr2023` §4.6.2 (`SampleVisibleWavelengths`, `VisibleWavelengthsPDF`).
