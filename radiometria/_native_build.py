@@ -41,6 +41,11 @@ FLAGS = (
     "-ffp-contract=off",
     "-fno-trapping-math",
     "-march=native",
+) + (
+    # x86: GCC and Clang default to 256-bit vectors even where AVX-512 is there; the brute
+    # force's loops are sized for 16 lanes (any-hit queries on the Cornell box, one core:
+    # 53.7 -> 46.5 ns per ray). No effect on CPUs without AVX-512.
+    ("-mprefer-vector-width=512",) if platform.machine().lower() in ("x86_64", "amd64") else ()
 )
 
 

@@ -376,21 +376,78 @@ inline void brute_class(const T* q, int32_t kk, Block<T>& b, int begin, int end)
   }
 }
 
+// The barycentrics of each slot's hit in [begin, end) of one axis class, as `barycentrics`
+// computes them (the same operations, branch-free, so that the loop vectorises with gathers of
+// the hit triangles' corners); slots without a hit get 0.
+template <typename T, int KZ>
+inline void brute_barycentrics(const T* tri, Block<T>& b, T* b1, T* b2, int begin, int end) {
+  constexpr int KX = KZ == 2 ? 0 : KZ + 1;
+  constexpr int KY = KX == 2 ? 0 : KX + 1;
+  auto edge_v = [](T px, T py, T qx, T qy) {  // `edge`, with selects
+    const bool swap = (px > qx) | ((px == qx) & (py > qy));
+    const T ax = swap ? qx : px, ay = swap ? qy : py;
+    const T bx = swap ? px : qx, by = swap ? py : qy;
+    const T e = ax * by - ay * bx;
+    return swap ? -e : e;
+  };
+#pragma GCC ivdep
+  for (int i = begin; i < end; ++i) {
+    const int32_t p = b.best[i];
+    const int64_t at = 9 * static_cast<int64_t>(p >= 0 ? p : 0);
+    T cx[3], cy[3];
+    for (int c = 0; c < 3; ++c) {
+      const T pz = tri[at + 3 * c + KZ] - b.oz[i];
+      cx[c] = (tri[at + 3 * c + KX] - b.ox[i]) - b.sx[i] * pz;
+      cy[c] = (tri[at + 3 * c + KY] - b.oy[i]) - b.sy[i] * pz;
+    }
+    const T u = edge_v(cx[2], cy[2], cx[1], cy[1]);
+    const T vv = edge_v(cx[0], cy[0], cx[2], cy[2]);
+    const T w = edge_v(cx[1], cy[1], cx[0], cy[0]);
+    const T det = u + vv + w;
+    const bool ok = (((u >= 0) & (vv >= 0) & (w >= 0)) | ((u <= 0) & (vv <= 0) & (w <= 0))) &
+                    (det != 0);
+    const T inv_det = T(1) / (ok ? det : T(1));
+    b1[i] = p >= 0 ? vv * inv_det : T(0);
+    b2[i] = p >= 0 ? w * inv_det : T(0);
+  }
+}
+
 template <typename T, bool kAny>
 void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int64_t begin,
                  int64_t end) {
   const T *o = io.o, *d = io.d, *lo = io.lo, *hi = io.hi;
   Block<T> b;
-  Ray<T> rays[kBlock];
+  // Per ray of the block, what `setup_ray` computes for the triangle test (its axis kz, the
+  // shear constants, the permuted origin; not the inverse direction), in a loop that vectorises.
+  alignas(64) T rox[kBlock], roy[kBlock], roz[kBlock], rsx[kBlock], rsy[kBlock], rsz[kBlock];
+  alignas(64) int32_t rkz[kBlock];
+  alignas(64) T sb1[kSlots], sb2[kSlots];
   for (int64_t base = begin; base < end; base += kBlock) {
     const int m = static_cast<int>(std::min<int64_t>(kBlock, end - base));
+    const T* ob = o + 3 * base;
+    const T* db = d + 3 * base;
+#pragma GCC ivdep
+    for (int i = 0; i < m; ++i) {
+      const T dx = db[3 * i], dy = db[3 * i + 1], dz = db[3 * i + 2];
+      const T ox = ob[3 * i], oy = ob[3 * i + 1], oz = ob[3 * i + 2];
+      const T ax = std::fabs(dx), ay = std::fabs(dy), az = std::fabs(dz);
+      const bool z0 = (ax >= ay) & (ax >= az);
+      const bool z1 = !z0 & (ay >= az);
+      // (kx, ky, kz) = (1, 2, 0), (2, 0, 1) or (0, 1, 2)
+      const T dkz = z0 ? dx : (z1 ? dy : dz);
+      const T dkx = z0 ? dy : (z1 ? dz : dx);
+      const T dky = z0 ? dz : (z1 ? dx : dy);
+      rsx[i] = dkx / dkz;
+      rsy[i] = dky / dkz;
+      rsz[i] = T(1) / dkz;
+      roz[i] = z0 ? ox : (z1 ? oy : oz);
+      rox[i] = z0 ? oy : (z1 ? oz : ox);
+      roy[i] = z0 ? oz : (z1 ? ox : oy);
+      rkz[i] = z0 ? 0 : (z1 ? 1 : 2);
+    }
     // group the block's rays by kz: slots [0, e0) kz = 0, [e0, e1) kz = 1, [e1, e2) kz = 2
     int count[3] = {0, 0, 0};
-    for (int i = 0; i < m; ++i) {
-      const int64_t g = base + i;
-      rays[i] = setup_ray<T>(o + 3 * g, d + 3 * g, lo[g], hi[g]);
-      ++count[rays[i].kz];
-    }
+    for (int i = 0; i < m; ++i) ++count[rkz[i]];
     auto padded = [](int c) { return (c + kLanes - 1) / kLanes * kLanes; };
     const int e0 = padded(count[0]), e1 = e0 + padded(count[1]), e2 = e1 + padded(count[2]);
     for (int s = 0; s < e2; ++s) {  // padding: rays that never hit
@@ -402,11 +459,10 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
     }
     int next[3] = {0, e0, e1};
     for (int i = 0; i < m; ++i) {
-      const Ray<T>& r = rays[i];
-      const int s = next[r.kz]++;
-      b.ox[s] = r.ox, b.oy[s] = r.oy, b.oz[s] = r.oz;
-      b.sx[s] = r.sx, b.sy[s] = r.sy, b.sz[s] = r.sz;
-      b.tlo[s] = r.t_lo, b.tbest[s] = r.t_hi;
+      const int s = next[rkz[i]]++;
+      b.ox[s] = rox[i], b.oy[s] = roy[i], b.oz[s] = roz[i];
+      b.sx[s] = rsx[i], b.sy[s] = rsy[i], b.sz[s] = rsz[i];
+      b.tlo[s] = lo[base + i], b.tbest[s] = hi[base + i];
       b.ray[s] = i;
     }
     for (int64_t k = 0; k < f; ++k) {
@@ -417,19 +473,19 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
       brute_class<T, kAny, 1>(q, kk, b, e0, e1);
       brute_class<T, kAny, 2>(q, kk, b, e1, e2);
     }
+    if (!kAny) {
+      brute_barycentrics<T, 0>(tri, b, sb1, sb2, 0, e0);
+      brute_barycentrics<T, 1>(tri, b, sb1, sb2, e0, e1);
+      brute_barycentrics<T, 2>(tri, b, sb1, sb2, e1, e2);
+    }
     for (int s = 0; s < e2; ++s) {
       if (b.ray[s] < 0) continue;
-      const Ray<T>& r = rays[b.ray[s]];
       const int64_t g = base + b.ray[s];
       const int32_t p = b.best[s];
       io.prim[g] = p;
       io.t[g] = (p >= 0 && !kAny) ? b.tbest[s] : std::numeric_limits<T>::infinity();
-      T b1 = 0, b2 = 0;
-      if (p >= 0 && !kAny) {
-        barycentrics(r, tri + 9 * static_cast<int64_t>(p), b1, b2);
-      }
-      io.b1[g] = b1;
-      io.b2[g] = b2;
+      io.b1[g] = kAny ? T(0) : sb1[s];
+      io.b2[g] = kAny ? T(0) : sb2[s];
     }
   }
 }
