@@ -113,6 +113,26 @@ def test_native_brute_force_matches_the_jax_loop(scenes, name):
     np.testing.assert_array_equal(np.asarray(batched).ravel(), np.asarray(ref.prim))
 
 
+@pytest.mark.parametrize("backend", ["native", "jax"])
+def test_brute_force_on_partial_blocks_and_an_empty_mesh(scenes, backend):
+    """Ray counts that leave the native kernel's blocks (256 rays, axis classes padded to 16
+    lanes) partly filled give the hits of full batches; a mesh of no triangles is missed by
+    every ray (t = inf, prim = -1, zero barycentrics)."""
+    v, f, _, o, d, tmax = scenes["soup32"]
+    mesh = TriangleMesh(v, f)
+    full = intersect_brute_force_closest(mesh, o, d, tmax, backend=backend)
+    for n in (1, 17, 257):
+        part = intersect_brute_force_closest(mesh, o[:n], d[:n], tmax[:n], backend=backend)
+        _assert_same_hits(part, jax.tree.map(lambda x, n=n: x[:n], full), rtol=0)
+    empty = TriangleMesh(np.zeros((0, 3), v.dtype), np.zeros((0, 3), np.int32))
+    miss = intersect_brute_force_closest(empty, o[:17], d[:17], tmax[:17], backend=backend)
+    np.testing.assert_array_equal(np.asarray(miss.prim), -1)
+    np.testing.assert_array_equal(np.asarray(miss.t), np.inf)
+    np.testing.assert_array_equal(np.asarray(miss.b1), 0)
+    np.testing.assert_array_equal(np.asarray(miss.b2), 0)
+    assert not np.any(np.asarray(intersect_brute_force_any(empty, o[:17], d[:17], backend=backend)))
+
+
 def test_brute_force_accepts_bvh_and_mesh(scenes):
     v, f, bvh, o, d, tmax = scenes["soup64"]
     a = intersect_brute_force_closest(bvh, o, d, tmax)

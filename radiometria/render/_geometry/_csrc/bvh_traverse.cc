@@ -473,10 +473,13 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
       brute_class<T, kAny, 1>(q, kk, b, e0, e1);
       brute_class<T, kAny, 2>(q, kk, b, e1, e2);
     }
-    if (!kAny) {
+    if (!kAny && f > 0) {  // (no triangles: no hits, and no corners to gather)
       brute_barycentrics<T, 0>(tri, b, sb1, sb2, 0, e0);
       brute_barycentrics<T, 1>(tri, b, sb1, sb2, e0, e1);
       brute_barycentrics<T, 2>(tri, b, sb1, sb2, e1, e2);
+    } else {
+      std::fill(sb1, sb1 + e2, T(0));
+      std::fill(sb2, sb2 + e2, T(0));
     }
     for (int s = 0; s < e2; ++s) {
       if (b.ray[s] < 0) continue;
