@@ -108,26 +108,6 @@ inline bool triangle_test(const Ray<T>& r, const T* v, T& t, T& b1, T& b2) {
   return true;
 }
 
-// Barycentrics of a known hit, as `_brute_closest` recomputes them (no range checks).
-template <typename T>
-inline void barycentrics(const Ray<T>& r, const T* v, T& b1, T& b2) {
-  T cx[3], cy[3];
-  for (int c = 0; c < 3; ++c) {
-    const T* p = v + 3 * c;
-    const T pz = p[r.kz] - r.oz;
-    cx[c] = (p[r.kx] - r.ox) - r.sx * pz;
-    cy[c] = (p[r.ky] - r.oy) - r.sy * pz;
-  }
-  const T u = edge(cx[2], cy[2], cx[1], cy[1]);
-  const T vv = edge(cx[0], cy[0], cx[2], cy[2]);
-  const T w = edge(cx[1], cy[1], cx[0], cy[0]);
-  const T det = u + vv + w;
-  const bool ok = ((u >= 0 && vv >= 0 && w >= 0) || (u <= 0 && vv <= 0 && w <= 0)) && det != 0;
-  const T inv_det = T(1) / (ok ? det : T(1));
-  b1 = vv * inv_det;
-  b2 = w * inv_det;
-}
-
 template <typename T>
 struct Tree {
   const T* boxes;          // (nodes, 12)
@@ -376,9 +356,9 @@ inline void brute_class(const T* q, int32_t kk, Block<T>& b, int begin, int end)
   }
 }
 
-// The barycentrics of each slot's hit in [begin, end) of one axis class, as `barycentrics`
-// computes them (the same operations, branch-free, so that the loop vectorises with gathers of
-// the hit triangles' corners); slots without a hit get 0.
+// The barycentrics of each slot's hit in [begin, end) of one axis class, as `_brute_closest`
+// recomputes them (no range checks; `edge` and the triangle test's operations, branch-free, so
+// that the loop vectorises with gathers of the hit triangles' corners); no hit gets 0.
 template <typename T, int KZ>
 inline void brute_barycentrics(const T* tri, Block<T>& b, T* b1, T* b2, int begin, int end) {
   constexpr int KX = KZ == 2 ? 0 : KZ + 1;
