@@ -363,13 +363,6 @@ template <typename T, int KZ>
 inline void brute_barycentrics(const T* tri, Block<T>& b, T* b1, T* b2, int begin, int end) {
   constexpr int KX = KZ == 2 ? 0 : KZ + 1;
   constexpr int KY = KX == 2 ? 0 : KX + 1;
-  auto edge_v = [](T px, T py, T qx, T qy) {  // `edge`, with selects
-    const bool swap = (px > qx) | ((px == qx) & (py > qy));
-    const T ax = swap ? qx : px, ay = swap ? qy : py;
-    const T bx = swap ? px : qx, by = swap ? py : qy;
-    const T e = ax * by - ay * bx;
-    return swap ? -e : e;
-  };
 #pragma GCC ivdep
   for (int i = begin; i < end; ++i) {
     const int32_t p = b.best[i];
@@ -380,9 +373,9 @@ inline void brute_barycentrics(const T* tri, Block<T>& b, T* b1, T* b2, int begi
       cx[c] = (tri[at + 3 * c + KX] - b.ox[i]) - b.sx[i] * pz;
       cy[c] = (tri[at + 3 * c + KY] - b.oy[i]) - b.sy[i] * pz;
     }
-    const T u = edge_v(cx[2], cy[2], cx[1], cy[1]);
-    const T vv = edge_v(cx[0], cy[0], cx[2], cy[2]);
-    const T w = edge_v(cx[1], cy[1], cx[0], cy[0]);
+    const T u = edge(cx[2], cy[2], cx[1], cy[1]);
+    const T vv = edge(cx[0], cy[0], cx[2], cy[2]);
+    const T w = edge(cx[1], cy[1], cx[0], cy[0]);
     const T det = u + vv + w;
     const bool ok = (((u >= 0) & (vv >= 0) & (w >= 0)) | ((u <= 0) & (vv <= 0) & (w <= 0))) &
                     (det != 0);
@@ -467,8 +460,8 @@ void brute_block(const T* rows, int64_t f, const T* tri, const RayIO<T>& io, int
       const int32_t p = b.best[s];
       io.prim[g] = p;
       io.t[g] = (p >= 0 && !kAny) ? b.tbest[s] : std::numeric_limits<T>::infinity();
-      io.b1[g] = kAny ? T(0) : sb1[s];
-      io.b2[g] = kAny ? T(0) : sb2[s];
+      io.b1[g] = sb1[s];  // zero for any-hit queries and misses
+      io.b2[g] = sb2[s];
     }
   }
 }
