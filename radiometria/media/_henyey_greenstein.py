@@ -99,7 +99,7 @@ class HenyeyGreenstein(AbstractPhaseFunction):
         shape = jnp.broadcast_shapes(shape, cos_theta.shape)
         cos_theta = jnp.broadcast_to(cos_theta, shape)
         forward = jnp.broadcast_to(-wo, shape + (3,))
-        wi = _direction_about(forward, cos_theta, 2.0 * math.pi * jnp.broadcast_to(u1, shape))
+        wi = _direction_about(forward, cos_theta, jnp.broadcast_to(u1, shape))
         val = jnp.broadcast_to(_hg(cos_theta, g), shape)
         return PhaseSample(wi=wi, value=val, pdf=val)
 

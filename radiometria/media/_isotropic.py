@@ -52,7 +52,7 @@ class IsotropicPhaseFunction(AbstractPhaseFunction):
         wo = jnp.broadcast_to(wo, shape + (3,))
         u = jnp.broadcast_to(u, shape + (2,))
         cos_theta = 1.0 - 2.0 * u[..., 0]
-        wi = _direction_about(-wo, cos_theta, 2.0 * math.pi * u[..., 1])
+        wi = _direction_about(-wo, cos_theta, u[..., 1])
         val = jnp.full(shape, _INV_4PI, dtype=wi.dtype)
         return PhaseSample(wi=wi, value=val, pdf=val)
 

@@ -6,7 +6,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._math import safe_sqrt
+from .._math import safe_sqrt, sincos_pi
 
 
 class PhaseSample(eqx.Module):
@@ -85,12 +85,14 @@ def _coordinate_system(v: Array) -> tuple[Array, Array]:
     return s, t
 
 
-def _direction_about(axis: Array, cos_theta: Array, phi: Array) -> Array:
-    """The unit vector at angle theta from `axis (..., 3)` and azimuth `phi` around it."""
+def _direction_about(axis: Array, cos_theta: Array, u_phi: Array) -> Array:
+    """The unit vector at angle theta from `axis (..., 3)` and azimuth `2 pi u_phi` around it
+    (`u_phi` in turns)."""
     s, t = _coordinate_system(axis)
     sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta)
+    sin_phi, cos_phi = sincos_pi(2.0 * u_phi)
     return (
-        (sin_theta * jnp.cos(phi))[..., None] * s
-        + (sin_theta * jnp.sin(phi))[..., None] * t
+        (sin_theta * cos_phi)[..., None] * s
+        + (sin_theta * sin_phi)[..., None] * t
         + cos_theta[..., None] * axis
     )

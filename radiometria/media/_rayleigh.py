@@ -63,7 +63,7 @@ class RayleighPhaseFunction(AbstractPhaseFunction):
         mu = jnp.sign(z) * (a - 1.0 / a)
         mu = jnp.clip(mu, -1.0, 1.0)
         forward = jnp.broadcast_to(-wo, shape + (3,))
-        wi = _direction_about(forward, mu, 2.0 * math.pi * u[..., 1])
+        wi = _direction_about(forward, mu, u[..., 1])
         val = _C * (1.0 + mu * mu)
         return PhaseSample(wi=wi, value=val, pdf=val)
 

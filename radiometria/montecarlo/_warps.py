@@ -24,7 +24,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_last_axis, check_unit_interval
-from .._math import dot, safe_div, safe_sqrt
+from .._math import dot, safe_div, safe_sqrt, sincos_pi
 from .._types import Float, FloatLike
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 
@@ -83,8 +83,8 @@ def sample_uniform_disk_polar(u: FloatLike, *, check: bool = True) -> Float[Arra
     """
     u = _u(u, 2, check=check)
     r = jnp.sqrt(u[..., 0])
-    theta = 2 * PI * u[..., 1]
-    return jnp.stack([r * jnp.cos(theta), r * jnp.sin(theta)], axis=-1)
+    sin, cos = sincos_pi(2.0 * u[..., 1])  # theta = 2 pi u1
+    return jnp.stack([r * cos, r * sin], axis=-1)
 
 
 @eqx.filter_jit
@@ -293,8 +293,8 @@ def sample_uniform_hemisphere(u: FloatLike, *, check: bool = True) -> Float[Arra
     u = _u(u, 2, check=check)
     z = u[..., 0]
     r = safe_sqrt(1.0 - z * z)
-    phi = 2 * PI * u[..., 1]
-    return jnp.stack([r * jnp.cos(phi), r * jnp.sin(phi), z], axis=-1)
+    sin, cos = sincos_pi(2.0 * u[..., 1])  # phi = 2 pi u1
+    return jnp.stack([r * cos, r * sin, z], axis=-1)
 
 
 @eqx.filter_jit
@@ -361,8 +361,8 @@ def sample_uniform_sphere(u: FloatLike, *, check: bool = True) -> Float[Array, "
     u = _u(u, 2, check=check)
     z = 1.0 - 2.0 * u[..., 0]
     r = safe_sqrt(1.0 - z * z)
-    phi = 2 * PI * u[..., 1]
-    return jnp.stack([r * jnp.cos(phi), r * jnp.sin(phi), z], axis=-1)
+    sin, cos = sincos_pi(2.0 * u[..., 1])  # phi = 2 pi u1
+    return jnp.stack([r * cos, r * sin, z], axis=-1)
 
 
 @eqx.filter_jit
@@ -448,8 +448,8 @@ def sample_uniform_cone(
         omc = as_float_array(one_minus_cos_theta_max, "one_minus_cos_theta_max")
     v = u[..., 0] * omc  # 1 - cos theta
     sin_t = safe_sqrt(v * (2.0 - v))
-    phi = 2 * PI * u[..., 1]
-    return jnp.stack([sin_t * jnp.cos(phi), sin_t * jnp.sin(phi), 1.0 - v], axis=-1)
+    sin, cos = sincos_pi(2.0 * u[..., 1])  # phi = 2 pi u1
+    return jnp.stack([sin_t * cos, sin_t * sin, 1.0 - v], axis=-1)
 
 
 @eqx.filter_jit

@@ -17,7 +17,7 @@ import jax.scipy.special as jsp
 from jax import Array
 
 from .._checks import as_float_array
-from .._math import acos_fast, align_ranks, safe_sqrt
+from .._math import acos_fast, align_ranks, safe_sqrt, sincos_pi
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
 from ._warps import _sample_disk_concentric
 
@@ -306,9 +306,9 @@ def _beckmann_sample11(cos_theta: Array, u0: Array, u1: Array) -> tuple[Array, A
     # Near normal incidence the visible slopes are the plain Gaussian ones (polar form).
     normal = cos_theta > 0.9999
     r = jnp.sqrt(-jnp.log1p(-u0))
-    phi = 2.0 * jnp.pi * u1
-    slope_x = jnp.where(normal, r * jnp.cos(phi), inv[0])
-    slope_y = jnp.where(normal, r * jnp.sin(phi), inv[1])
+    sin, cos = sincos_pi(2.0 * u1)  # phi = 2 pi u1
+    slope_x = jnp.where(normal, r * cos, inv[0])
+    slope_y = jnp.where(normal, r * sin, inv[1])
     return slope_x, slope_y
 
 

@@ -45,7 +45,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from .._checks import as_float_array, check_in_range
-from .._math import safe_div
+from .._math import safe_div, sincos_pi
 from ._bxdfs import (
     AbstractBxDF,
     BSDFSample,
@@ -433,8 +433,8 @@ class PrincipledBxDF(_AbstractPrincipled):
         a2 = (0.1 + (0.001 - 0.1) * p["clearcoat_gloss"]) ** 2
         cos2 = (1.0 - a2 ** (1.0 - u2[..., 1])) / (1.0 - a2)
         sin_t, cos_c = jnp.sqrt(jnp.maximum(0.0, 1.0 - cos2)), jnp.sqrt(jnp.maximum(0.0, cos2))
-        phi = 2.0 * jnp.pi * u2[..., 0]
-        m_cc = _stack3(jnp.cos(phi) * sin_t, jnp.sin(phi) * sin_t, cos_c)
+        sin_phi, cos_phi = sincos_pi(2.0 * u2[..., 0])  # phi = 2 pi u
+        m_cc = _stack3(cos_phi * sin_t, sin_phi * sin_t, cos_c)
         w_c = 2.0 * _dot(o, m_cc)[..., None] * m_cc - o
         x, y, z = _sample_cosine_hemisphere(u2[..., 0], u2[..., 1])
         w_d = _stack3(x, y, z)

@@ -2,39 +2,14 @@
 
 `radiometria.montecarlo` holds the public, validated warps; these unchecked versions avoid
 `sin`/`cos`, which XLA's CPU backend lowers to scalar library calls (about 10 ns per element
-against about 1 ns for the polynomial below), because the BxDF samplers run in the renderer's
-inner loop.
+against about 1 ns for the polynomials of `radiometria._math.sincos_reduced`), because the
+BxDF samplers run in the renderer's inner loop.
 """
 
 import jax.numpy as jnp
 from jax import Array
 
-
-def _sincos_quarter(x: Array) -> tuple[Array, Array]:
-    """(sin x, cos x) for |x| <= pi/4 by Taylor polynomials (error < 1e-11).
-
-    XLA's CPU backend lowers `sin`/`cos` to scalar library calls, about 10x slower than these
-    few fused multiply-adds; the samplers only need the reduced range.
-    """
-    x2 = x * x
-    s = x * (
-        1.0
-        + x2
-        * (
-            -1.0 / 6
-            + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 * (1.0 / 362880 + x2 * (-1.0 / 39916800))))
-        )
-    )
-    c = 1.0 + x2 * (
-        -0.5
-        + x2
-        * (
-            1.0 / 24
-            + x2
-            * (-1.0 / 720 + x2 * (1.0 / 40320 + x2 * (-1.0 / 3628800 + x2 * (1.0 / 479001600))))
-        )
-    )
-    return s, c
+from .._math import sincos_reduced
 
 
 def _sample_disk_concentric(u0: Array, u1: Array) -> tuple[Array, Array]:
@@ -46,7 +21,7 @@ def _sample_disk_concentric(u0: Array, u1: Array) -> tuple[Array, Array]:
     # phi in [-pi/4, pi/4]; the angle is phi (branch a) or pi/2 - phi (branch b).
     num = jnp.where(use_a, b, a)
     den = jnp.where(r == 0, 1.0, r)
-    s, c = _sincos_quarter((jnp.pi / 4.0) * (num / den))
+    s, c = sincos_reduced((jnp.pi / 4.0) * (num / den))
     x = r * jnp.where(use_a, c, s)
     y = r * jnp.where(use_a, s, c)
     return x, y

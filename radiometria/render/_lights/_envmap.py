@@ -24,7 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from ..._math import acos_fast, atan2_fast, dot
+from ..._math import acos_fast, atan2_fast, dot, sincos_pi
 from ...camera import read_exr, read_hdr
 from ...montecarlo import PiecewiseConstant2D
 from ...upsampling import (
@@ -267,11 +267,9 @@ class EnvironmentLight(AbstractSurfacelessLight):
         cell_uv, pdf_uv, _ = self.distribution.sample(u2, check=False)
         u = jnp.mod(cell_uv[:, 0] + 0.5 / w, 1.0)
         v = cell_uv[:, 1]
-        theta, phi = v * np.pi, u * (2.0 * np.pi)
-        sin_theta = jnp.sin(theta)
-        local = jnp.stack(
-            [jnp.sin(phi) * sin_theta, jnp.cos(theta), -jnp.cos(phi) * sin_theta], axis=-1
-        )
+        sin_theta, cos_theta = sincos_pi(v)  # theta = pi v
+        sin_phi, cos_phi = sincos_pi(2.0 * u)  # phi = 2 pi u
+        local = jnp.stack([sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta], axis=-1)
         wi = local @ self.to_world.T
         wi = wi / jnp.sqrt(dot(wi, wi))[:, None]
         le = self._radiance(u, v, wavelength_nm)
