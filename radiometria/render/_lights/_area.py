@@ -257,8 +257,15 @@ class AreaLight(AbstractLight):
             )  # fmt: skip
         uv = {}
         if face_uv is not None and not isinstance(radiance, ConstantTexture):
-            c = jnp.asarray(face_uv, dtype)[lf]
-            uv = {"uv0": c[:, 0], "duv1": c[:, 1] - c[:, 0], "duv2": c[:, 2] - c[:, 0]}
+            c = np.asarray(face_uv, np.float64)[light_face]
+            uv = {
+                k: jnp.asarray(np.asarray(v, dtype))
+                for k, v in (
+                    ("uv0", c[:, 0]),
+                    ("duv1", c[:, 1] - c[:, 0]),
+                    ("duv2", c[:, 2] - c[:, 0]),
+                )
+            }
         spheres = {}
         if (
             emitter_sphere is not None
@@ -289,10 +296,11 @@ class AreaLight(AbstractLight):
             light_pdf_area=jnp.asarray(pdf_area, dtype),
             light_face=lf,
             light_cdf=jnp.asarray(light_cdf, dtype),
-            p0=p0[lf],
-            e1=e1[lf],
-            e2=e2[lf],
-            normal=normal[lf],
+            # rows gathered on the host: eager device gathers compile about six programs
+            p0=jnp.asarray(np.asarray(p0)[light_face]),
+            e1=jnp.asarray(np.asarray(e1)[light_face]),
+            e2=jnp.asarray(np.asarray(e2)[light_face]),
+            normal=jnp.asarray(np.asarray(normal)[light_face]),
             selection=selection,
             phi=phi,
             **uv,
