@@ -284,23 +284,26 @@ def _tables(alpha: Array, eta: Array, distribution: str, n_t: int, n_r: int):
     mu = np.maximum(1e-6, np.linspace(0.0, 1.0, ROUGH_TRANSMITTANCE_RES))
     wi = jnp.asarray(np.stack([np.sqrt(1.0 - mu * mu), np.zeros_like(mu), mu], -1), alpha.dtype)
 
-    def average(eta_, n: int, reflect: bool) -> Array:
-        u, weight = _gauss_legendre(n)
-        u, weight = jnp.asarray(u, wi.dtype), jnp.asarray(weight, wi.dtype)
-        w = jnp.broadcast_to(wi[:, None, :], (mu.size, u.shape[0], 3))
-        m = dist.sample_wm(w, jnp.broadcast_to(u[None], w.shape[:-1] + (2,)))
-        c = jnp.sum(w * m, axis=-1)
-        f, _, _, inv_etap, cos_t, _ = _fr_dielectric_snell(c, eta_ + 0 * c, 1.0 / eta_ + 0 * c)
-        if reflect:
-            out = 2.0 * c[..., None] * m - w
-            value = jnp.where(out[..., 2] > 0, f * dist.G1(out), 0.0)
-        else:  # refraction through m (thesis eq. 3.12)
-            out = -w * inv_etap[..., None] + (c * inv_etap - cos_t)[..., None] * m
-            value = jnp.where(out[..., 2] * w[..., 2] < 0, (1.0 - f) * dist.G1(out), 0.0)
-        return jnp.sum(value * weight[None], axis=-1)
-
-    transmittance = average(eta, n_t, reflect=False)
-    internal = 2.0 * jnp.mean(average(1.0 / eta, n_r, reflect=True) * wi[:, 2])
+    # Both averages in one pass over the concatenated rules (columns [0, n_t^2) refract with
+    # eta, the rest reflect with 1 / eta): one copy of the visible-normal sampling, Fresnel and
+    # G1 in the program instead of two (first compile 0.95 -> 0.5 s with Beckmann, measured).
+    (u_t, w_t), (u_r, w_r) = _gauss_legendre(n_t), _gauss_legendre(n_r)
+    k = u_t.shape[0]
+    u = jnp.asarray(np.concatenate([u_t, u_r]), wi.dtype)
+    reflect = np.arange(u.shape[0]) >= k
+    w = jnp.broadcast_to(wi[:, None, :], (mu.size, u.shape[0], 3))
+    m = dist.sample_wm(w, jnp.broadcast_to(u[None], w.shape[:-1] + (2,)))
+    c = jnp.sum(w * m, axis=-1)
+    eta_ = jnp.where(reflect[None], 1.0 / eta, eta) + 0 * c
+    f, _, _, inv_etap, cos_t, _ = _fr_dielectric_snell(c, eta_, 1.0 / eta_)
+    out_r = 2.0 * c[..., None] * m - w
+    out_t = -w * inv_etap[..., None] + (c * inv_etap - cos_t)[..., None] * m  # thesis eq. 3.12
+    out = jnp.where(reflect[None, :, None], out_r, out_t)
+    valid = jnp.where(reflect[None], out[..., 2] > 0, out[..., 2] * w[..., 2] < 0)
+    value = jnp.where(valid, jnp.where(reflect[None], f, 1.0 - f) * dist.G1(out), 0.0)
+    transmittance = jnp.sum(value[:, :k] * jnp.asarray(w_t, wi.dtype)[None], axis=-1)
+    albedo = jnp.sum(value[:, k:] * jnp.asarray(w_r, wi.dtype)[None], axis=-1)
+    internal = 2.0 * jnp.mean(albedo * wi[:, 2])
     return transmittance, internal
 
 
