@@ -14,6 +14,7 @@ unit in brackets.
 from collections.abc import Iterable, Mapping
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
@@ -30,8 +31,32 @@ __all__ = [
     "check_positive_int",
     "check_unit_interval",
     "check_wavelength_grid",
+    "device_array",
     "lookup",
 ]
+
+
+def device_array(x, dtype=None) -> Array:
+    """`jnp.asarray(x, dtype)` without compiling anything for host values.
+
+    Eagerly, `jnp.asarray` of a NumPy array or a Python scalar runs a compiled identity
+    program (`lax.stage`; with a cast, `convert_element_type`), one per shape and dtype: about
+    10 ms each on a first run (jax 0.10), and a scene's setup converts some forty arrays.
+    NumPy arrays and scalars, Python scalars and flat lists of those here go to the default
+    device by `jax.device_put` (NumPy casts to `dtype` first), with the dtype (JAX's canonical one:
+    float32 unless `jax_enable_x64`) and weak type `jnp.asarray` would give; anything else
+    (JAX arrays, tracers, sequences that may hold them) goes through `jnp.asarray`.
+    """
+    host = (np.ndarray, np.generic, bool, int, float)
+    if not isinstance(x, host) and not (
+        isinstance(x, list | tuple) and all(isinstance(e, host) for e in x)
+    ):
+        return jnp.asarray(x, dtype)
+    if dtype is None and isinstance(x, bool | int | float) and not isinstance(x, np.generic):
+        return jax.device_put(x)  # weakly typed, like jnp.asarray
+    if dtype is not None:
+        dtype = jax.dtypes.canonicalize_dtype(dtype)
+    return jax.device_put(np.asarray(x, dtype))
 
 
 def as_float_array(x, name: str) -> Array:
@@ -44,7 +69,7 @@ def as_float_array(x, name: str) -> Array:
     if isinstance(x, bool):
         raise TypeError(f"`{name}` must be a real floating-point value, got bool {x!r}.")
     if isinstance(x, int | float):
-        return jnp.asarray(float(x))
+        return device_array(float(x))
     dtype = getattr(x, "dtype", None)
     if dtype is None:
         arr = np.asarray(x)
@@ -58,7 +83,7 @@ def as_float_array(x, name: str) -> Array:
             raise TypeError(f"`{name}` must be numeric, got {type(x).__name__}.")
         x = arr
     if jnp.issubdtype(dtype, jnp.floating):
-        return jnp.asarray(x)
+        return device_array(x)
     if jnp.issubdtype(dtype, jnp.integer) and getattr(x, "ndim", 1) == 0:
         return jnp.asarray(x, dtype=jnp.result_type(float))
     raise TypeError(

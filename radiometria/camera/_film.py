@@ -37,7 +37,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
-from .._checks import as_float_array, check_last_axis, check_positive_int
+from .._checks import as_float_array, check_last_axis, check_positive_int, device_array
 from .._math import interp_table, uniform_grid
 from .._types import Array, ArrayLike, Float
 from ..colorimetry import get_cmfs, get_colourspace
@@ -104,7 +104,7 @@ def _normalised_cmfs(cmfs, observer: str, dtype) -> tuple[Array, Array, tuple | 
         raise TypeError(f"`dtype` must be a floating dtype, got {dtype}.")
     wl, values = _cmf_table(cmfs, observer)
     y_integral = np.trapezoid(values[:, 1], wl)
-    return jnp.asarray(wl, dtype), jnp.asarray(values / y_integral, dtype), uniform_grid(wl)
+    return device_array(wl, dtype), device_array(values / y_integral, dtype), uniform_grid(wl)
 
 
 class SpectralResponse(eqx.Module):

@@ -28,11 +28,10 @@ import json
 from pathlib import Path
 
 import equinox as eqx
-import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
-from .._checks import as_float_array, check_choice
+from .._checks import as_float_array, check_choice, device_array
 from .._math import interp_columns
 from ..radiometry import AbstractSpectrum
 
@@ -130,8 +129,8 @@ def interpolate_table(
     """Linear interpolation of a table (n,) or (n, k) at `wavelength_nm` (any shape), in the
     dtype of `wavelength_nm`. Outside the table: 0 ("zero") or the edge value ("constant")."""
     dtype = wavelength_nm.dtype
-    xp = jnp.asarray(table_wavelengths, dtype=dtype)
-    fp = jnp.asarray(table_values, dtype=dtype)
+    xp = device_array(table_wavelengths, dtype=dtype)
+    fp = device_array(table_values, dtype=dtype)
     left = right = 0.0 if extrapolation == "zero" else None
     return interp_columns(wavelength_nm, xp, fp, left=left, right=right)
 
@@ -182,7 +181,7 @@ def get_cmfs(observer: str = DEFAULT_OBSERVER) -> TabulatedSpectra:
     """
     name = resolve_observer(observer)
     wl, v = {**CMFS_XYZ, **CMFS_RGB}[name]
-    return TabulatedSpectra(jnp.asarray(wl), jnp.asarray(v), name)
+    return TabulatedSpectra(device_array(wl), device_array(v), name)
 
 
 def resolve_illuminant(name: str) -> str:
@@ -212,4 +211,4 @@ def get_illuminant(name: str) -> TabulatedSpectra:
     """
     name = resolve_illuminant(name)
     wl, v = ILLUMINANTS_SD[name]
-    return TabulatedSpectra(jnp.asarray(wl), jnp.asarray(v), name)
+    return TabulatedSpectra(device_array(wl), device_array(v), name)

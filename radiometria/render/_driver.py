@@ -56,7 +56,7 @@ from jax.experimental import multihost_utils
 from jax.sharding import Mesh, NamedSharding, PartitionSpec as P
 from tqdm import tqdm
 
-from .._checks import check_choice, check_positive_int
+from .._checks import check_choice, check_positive_int, device_array
 from .._timing import mark
 from .._warmstart import (
     Interrupts as _Interrupts,
@@ -609,7 +609,7 @@ def render(
     kernel = _Kernel(scene, camera, rfilter, response, integrator, sampler)
     cfg = _Config(n_pixels, plan.tile, plan.passes, width, reconstruction, tuple(devices), n_bins)
     key = jax.random.key(int(seed))
-    spp_arr = jnp.int32(spp)
+    spp_arr = device_array(np.int32(spp))
     # The film lives where the step leaves it (replicated over the mesh), so that the first
     # step and the later ones share one compiled program (an uncommitted first film would be
     # a different jit signature and compile the step twice).

@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from .._checks import device_array
 from ._accelerators import (
     AbstractAccelerator,
     SphereAccelerator,
@@ -193,13 +194,13 @@ class RenderScene(eqx.Module):
         if isinstance(materials, SpectrumTable):
             n_mat = materials.values.shape[0]
             sides = np.zeros(n_mat, bool) if two_sided is None else np.asarray(two_sided, bool)
-            materials = [Diffuse(ConstantTexture(materials), jnp.asarray(sides.reshape(n_mat)))]
+            materials = [Diffuse(ConstantTexture(materials), device_array(sides.reshape(n_mat)))]
         elif two_sided is not None:
             raise ValueError("`two_sided` goes with a SpectrumTable; material plugins carry it.")
         if not isinstance(materials, MaterialSet):
             materials = MaterialSet.from_materials(list(materials))
         if isinstance(radiance, SpectrumTable):
-            radiance = ConstantTexture(SpectrumTable(jnp.asarray(radiance.values, dtype)))
+            radiance = ConstantTexture(SpectrumTable(device_array(radiance.values, dtype)))
         n_mat, n_em = materials.n_materials, radiance.n_rows
         if face_material.min(initial=0) < 0 or face_material.max(initial=0) >= n_mat:
             raise ValueError(f"`face_material` must index the {n_mat} materials.")
@@ -210,7 +211,7 @@ class RenderScene(eqx.Module):
         e1, e2 = v1 - v0, v2 - v0
         area = _areas(np, vertices, faces)
         normal = np.cross(e1, e2) / np.where(area > 0, 2.0 * area, 1.0)[:, None]
-        p0, e1, e2, normal = (jnp.asarray(x, dtype=dtype) for x in (v0, e1, e2, normal))
+        p0, e1, e2, normal = (device_array(x, dtype=dtype) for x in (v0, e1, e2, normal))
         sphere_fields, true_spheres = {}, None
         if spheres:
             sphere_fields = _sphere_fields(spheres, n_faces, dtype)
@@ -255,7 +256,7 @@ class RenderScene(eqx.Module):
             e1=e1,
             e2=e2,
             normal=normal,
-            face_material=jnp.asarray(face_material, dtype=jnp.int32),
+            face_material=device_array(face_material, dtype=jnp.int32),
             materials=materials,
             light=light,
             accelerator=accelerator,
@@ -321,7 +322,7 @@ def _sphere_fields(spheres, n_faces: int, dtype) -> dict:
         [s[0] for s in spheres], [s[1] for s in spheres], [s[2] for s in spheres], first,
         dtype=dtype,
     )  # fmt: skip
-    return {"spheres": sph, "face_sphere": jnp.asarray(face_sphere)}
+    return {"spheres": sph, "face_sphere": device_array(face_sphere)}
 
 
 def _optional_face_array(value, name: str, shape: tuple[int, ...], dtype):
@@ -334,7 +335,7 @@ def _optional_face_array(value, name: str, shape: tuple[int, ...], dtype):
             f"`{name}` must be finite, of shape ({', '.join(map(str, shape))}), got shape "
             f"{value.shape}."
         )
-    return jnp.asarray(value, dtype)
+    return device_array(value, dtype)
 
 
 def _media_fields(media, face_interior, face_exterior, camera_medium, n_faces) -> dict:
@@ -356,7 +357,7 @@ def _media_fields(media, face_interior, face_exterior, camera_medium, n_faces) -
                 f"or -2 (no boundary); got shape {a.shape}, range "
                 f"[{a.min(initial=0)}, {a.max(initial=0)}]."
             )
-        out[name] = jnp.asarray(a, jnp.int32)
+        out[name] = device_array(a, jnp.int32)
     inside = (out["face_interior"] == -2) != (out["face_exterior"] == -2)
     if bool(jnp.any(inside)):
         raise ValueError(

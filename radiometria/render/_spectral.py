@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from .._checks import device_array
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 from ..montecarlo import sample_visible_wavelengths_with_pdf
 from ..radiometry import AbstractSpectrum, PiecewiseLinearSpectrum
@@ -212,8 +213,8 @@ def _rgb_spectrum(rgb: np.ndarray, rgb_spectrum: type, grid: np.ndarray) -> np.n
     # the evaluation on the grid is compiled per class. (One program per class, lookup
     # inlined, compiled the refinement once per class: 0.36-0.71 s each, 1.5 s for the three
     # classes on a first run, against 0.95 s this way.)
-    spectrum = rgb_spectrum(get_lut("sRGB"), jnp.asarray(rgb))
-    return np.asarray(_evaluate_spectrum(spectrum, jnp.asarray(grid)), np.float64)
+    spectrum = rgb_spectrum(get_lut("sRGB"), device_array(rgb))
+    return np.asarray(_evaluate_spectrum(spectrum, device_array(grid)), np.float64)
 
 
 @eqx.filter_jit
@@ -259,7 +260,7 @@ def tabulate_spectrum(value: SpectralValue, rgb_spectrum: type) -> np.ndarray:
         wl, v = (np.asarray(a, np.float64) for a in (value.wavelengths_nm, value.values))
         return np.interp(grid, wl, v, left=0.0, right=0.0)
     if isinstance(value, AbstractSpectrum):
-        return np.asarray(_evaluate_spectrum(value, jnp.asarray(grid)), np.float64)
+        return np.asarray(_evaluate_spectrum(value, device_array(grid)), np.float64)
     if isinstance(value, int | float | np.floating | np.integer) and not isinstance(value, bool):
         return np.full(grid.shape, float(value))
     raise TypeError(

@@ -35,7 +35,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .._checks import as_float_array, check_last_axis
+from .._checks import as_float_array, check_last_axis, device_array
 from .._math import interp_table, uniform_grid
 from ..colorimetry import get_colourspace
 from ..radiometry import AbstractSpectrum
@@ -182,8 +182,8 @@ class RGBIlluminantSpectrum(AbstractSpectrum):
         self.coeffs, self.scale = _unbounded(lut, x)
         model = forward_model(name)
         dtype = self.coeffs.dtype
-        self.illuminant_wavelengths_nm = jnp.asarray(model.wavelengths_nm, dtype)
-        self.illuminant_values = jnp.asarray(model.illuminant, dtype)
+        self.illuminant_wavelengths_nm = device_array(model.wavelengths_nm, dtype)
+        self.illuminant_values = device_array(model.illuminant, dtype)
         self.illuminant_grid_nm = uniform_grid(model.wavelengths_nm)
 
     def illuminant(self, wavelength_nm: ArrayLike) -> Array:

@@ -9,6 +9,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from ..._checks import device_array
 from .._geometry._backends import AbstractTraversalBackend
 from .._geometry._brute_force import intersect_brute_force_any, intersect_brute_force_closest
 from .._geometry._mesh import TriangleMesh
@@ -46,7 +47,7 @@ class BruteForceAccelerator(AbstractAccelerator):
     @classmethod
     def from_triangles(cls, vertices, faces, *, dtype=jnp.float32) -> "BruteForceAccelerator":
         vertices = np.asarray(vertices, dtype=np.float64)
-        return cls(mesh=TriangleMesh(jnp.asarray(vertices, dtype=dtype), np.asarray(faces)))
+        return cls(mesh=TriangleMesh(device_array(vertices, dtype=dtype), np.asarray(faces)))
 
     def intersect_closest(self, origins, directions, t_max):
         return intersect_brute_force_closest(

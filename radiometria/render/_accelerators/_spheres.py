@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Int
 
+from ..._checks import device_array
 from .._geometry._sphere import Spheres
 from .._geometry._triangle import Hit
 from ._base import AbstractAccelerator
@@ -78,13 +79,13 @@ class SphereAccelerator(AbstractAccelerator):
         if not len(keep):
             return cls(triangles=None, triangle_face=None, spheres=spheres)
         inner = build_accelerator(vertices, faces[keep], kind=kind, dtype=dtype)
-        return cls(triangles=inner, triangle_face=jnp.asarray(keep), spheres=spheres)
+        return cls(triangles=inner, triangle_face=device_array(keep), spheres=spheres)
 
     def _rays(self, origins, directions, t_max):
         dtype = self.spheres.center.dtype
-        o = jnp.asarray(origins, dtype)
-        d = jnp.asarray(directions, dtype)
-        return o, d, jnp.broadcast_to(jnp.asarray(t_max, dtype), o.shape[:1])
+        o = device_array(origins, dtype)
+        d = device_array(directions, dtype)
+        return o, d, jnp.broadcast_to(device_array(t_max, dtype), o.shape[:1])
 
     def intersect_closest(self, origins, directions, t_max):
         o, d, t_max = self._rays(origins, directions, t_max)

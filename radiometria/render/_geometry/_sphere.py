@@ -20,6 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ..._math import acos_fast, atan2_fast, dot
 
 __all__ = ["MAX_ANALYTIC_SPHERES", "Spheres", "sphere_uv"]
@@ -116,10 +117,10 @@ class Spheres(eqx.Module):
             u, _, vt = np.linalg.svd(rotation)
             rotation = u @ vt
         return cls(
-            center=jnp.asarray(center, dtype),
-            radius=jnp.asarray(radius, dtype),
-            to_local=jnp.asarray(np.swapaxes(rotation, 1, 2), dtype),
-            face=jnp.asarray(np.asarray(face).reshape(k), jnp.int32),
+            center=device_array(center, dtype),
+            radius=device_array(radius, dtype),
+            to_local=device_array(np.swapaxes(rotation, 1, 2), dtype),
+            face=device_array(np.asarray(face).reshape(k), jnp.int32),
         )
 
     def _t(self, origins, directions, t_max):

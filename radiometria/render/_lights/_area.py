@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ..._math import dot
 from ...montecarlo import (
     sample_cosine_hemisphere,
@@ -41,9 +42,9 @@ def _mean_radiance(radiance: AbstractTexture, n_uv: int = 64) -> np.ndarray:
     uv = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
     row = np.repeat(np.arange(rows), uv.shape[0])
     values = radiance(
-        jnp.asarray(row, jnp.int32),
-        jnp.broadcast_to(jnp.asarray(wl, jnp.float32), (row.size, wl.size)),
-        jnp.asarray(np.tile(uv, (rows, 1)), jnp.float32),
+        device_array(row, jnp.int32),
+        jnp.broadcast_to(device_array(wl, jnp.float32), (row.size, wl.size)),
+        device_array(np.tile(uv, (rows, 1)), jnp.float32),
     )
     return np.asarray(values, np.float64).reshape(rows, -1).mean(axis=1)
 
@@ -179,7 +180,7 @@ class AreaLight(AbstractLight):
         - `dtype`: float dtype of the arrays.
         """
         if isinstance(radiance, SpectrumTable):
-            radiance = ConstantTexture(SpectrumTable(jnp.asarray(radiance.values, dtype)))
+            radiance = ConstantTexture(SpectrumTable(device_array(radiance.values, dtype)))
         face_emitter = np.asarray(face_emitter, np.int64)
         n_faces = face_emitter.shape[0]
         n_em = radiance.n_rows
@@ -231,11 +232,11 @@ class AreaLight(AbstractLight):
                 p_e = pdf_area[mine] @ area[mine]  # the emitter's selection probability
                 pdf_area[mine] = p_e / (4.0 * np.pi * radius[e] ** 2)
             analytic = {
-                "analytic_center": jnp.asarray(center, dtype),
-                "analytic_radius": jnp.asarray(radius, dtype),
-                "analytic_to_local": jnp.asarray(to_local, dtype),
+                "analytic_center": device_array(center, dtype),
+                "analytic_radius": device_array(radius, dtype),
+                "analytic_to_local": device_array(to_local, dtype),
             }
-        lf = jnp.asarray(light_face, jnp.int32)
+        lf = device_array(light_face, jnp.int32)
         selection = None
         if emissive.size and 2 <= np.unique(face_emitter[emissive]).size <= MAX_SPATIAL_EMITTERS:
             corners = np.asarray(p0, np.float64)[emissive][:, None] + np.stack(
@@ -259,7 +260,7 @@ class AreaLight(AbstractLight):
         if face_uv is not None and not isinstance(radiance, ConstantTexture):
             c = np.asarray(face_uv, np.float64)[light_face]
             uv = {
-                k: jnp.asarray(np.asarray(v, dtype))
+                k: device_array(np.asarray(v, dtype))
                 for k, v in (
                     ("uv0", c[:, 0]),
                     ("duv1", c[:, 1] - c[:, 0]),
@@ -285,22 +286,22 @@ class AreaLight(AbstractLight):
             p_e = np.zeros(n_em)
             np.add.at(p_e, face_emitter[light_face], prob)
             spheres = {
-                "sphere_center": jnp.asarray(center, dtype),
-                "sphere_radius": jnp.asarray(radius, dtype),
-                "sphere_prob": jnp.asarray(p_e, dtype),
+                "sphere_center": device_array(center, dtype),
+                "sphere_radius": device_array(radius, dtype),
+                "sphere_prob": device_array(p_e, dtype),
             }
         return cls(
             radiance=radiance,
-            two_sided=jnp.asarray(two_sided, bool),
-            face_emitter=jnp.asarray(face_emitter, jnp.int32),
-            light_pdf_area=jnp.asarray(pdf_area, dtype),
+            two_sided=device_array(two_sided, bool),
+            face_emitter=device_array(face_emitter, jnp.int32),
+            light_pdf_area=device_array(pdf_area, dtype),
             light_face=lf,
-            light_cdf=jnp.asarray(light_cdf, dtype),
+            light_cdf=device_array(light_cdf, dtype),
             # rows gathered on the host: eager device gathers compile about six programs
-            p0=jnp.asarray(np.asarray(p0)[light_face]),
-            e1=jnp.asarray(np.asarray(e1)[light_face]),
-            e2=jnp.asarray(np.asarray(e2)[light_face]),
-            normal=jnp.asarray(np.asarray(normal)[light_face]),
+            p0=device_array(np.asarray(p0)[light_face]),
+            e1=device_array(np.asarray(e1)[light_face]),
+            e2=device_array(np.asarray(e2)[light_face]),
+            normal=device_array(np.asarray(normal)[light_face]),
             selection=selection,
             phi=phi,
             **uv,

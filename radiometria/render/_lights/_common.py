@@ -4,6 +4,7 @@ plugin's rows by power, the checks of scene parameters, and the base of the delt
 import jax.numpy as jnp
 import numpy as np
 
+from ..._checks import device_array
 from ..._math import dot
 from ...upsampling import RGBIlluminantSpectrum
 from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
@@ -110,7 +111,7 @@ class AbstractDeltaLight(AbstractSurfacelessLight):
 
 def illuminant_table(rows: list[np.ndarray], dtype) -> SpectrumTable:
     """Rows tabulated on the renderer's grid as one `SpectrumTable`."""
-    return SpectrumTable(jnp.asarray(np.stack(rows), dtype))
+    return SpectrumTable(device_array(np.stack(rows), dtype))
 
 
 def row_cdf(weights: np.ndarray) -> np.ndarray:

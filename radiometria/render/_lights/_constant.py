@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ...montecarlo import sample_uniform_sphere
 from .._spectral import SpectrumTable
 from ._base import LightSample, emission_at_infinity
@@ -47,7 +48,7 @@ class ConstantLight(AbstractSurfacelessLight):
         """The same light knowing the scene's bounding sphere (`center` `(3,)`, `radius`)
         [scene units], so it can start light paths."""
         return dataclasses.replace(
-            self, bound_center=jnp.asarray(center, jnp.float32), bound_radius=radius
+            self, bound_center=device_array(center, jnp.float32), bound_radius=radius
         )
 
     @classmethod

@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from .._spectral import SpectrumTable
 from ._base import LightSample, emission_at_infinity
 from ._common import (
@@ -57,7 +58,7 @@ class DirectionalLight(AbstractDeltaLight):
         """The same lights knowing the scene's bounding sphere (`center` `(3,)`, `radius`)
         [scene units], so they can start light paths."""
         return dataclasses.replace(
-            self, bound_center=jnp.asarray(center, self.direction.dtype), bound_radius=radius
+            self, bound_center=device_array(center, self.direction.dtype), bound_radius=radius
         )
 
     @classmethod
@@ -77,9 +78,9 @@ class DirectionalLight(AbstractDeltaLight):
             rows.append(spectral_param(p, "irradiance", w))
         mean = np.array([r.mean() for r in rows])
         return cls(
-            direction=jnp.asarray(np.stack(dirs), dtype),
+            direction=device_array(np.stack(dirs), dtype),
             irradiance=illuminant_table(rows, dtype),
-            cdf=jnp.asarray(row_cdf(mean), dtype),
+            cdf=device_array(row_cdf(mean), dtype),
             mean_irradiance=float(mean.sum()),
         )
 

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ..._math import acos_fast, atan2_fast, dot, sincos_pi
 from ...camera import read_exr, read_hdr
 from ...montecarlo import PiecewiseConstant2D
@@ -128,7 +129,7 @@ class EnvironmentLight(AbstractSurfacelessLight):
         """The same light knowing the scene's bounding sphere (`center` `(3,)`, `radius`)
         [scene units], so it can start light paths."""
         return dataclasses.replace(
-            self, bound_center=jnp.asarray(center, self.to_world.dtype), bound_radius=radius
+            self, bound_center=device_array(center, self.to_world.dtype), bound_radius=radius
         )
 
     @classmethod
@@ -158,7 +159,7 @@ class EnvironmentLight(AbstractSurfacelessLight):
         h, w = rgb.shape[:2]
         # Coefficients and scale per texel (Mitsuba's srgb_model_fetch of rgb / (2 max rgb)).
         forward_model("sRGB")
-        spectrum = RGBIlluminantSpectrum(get_lut("sRGB"), jnp.asarray(rgb))
+        spectrum = RGBIlluminantSpectrum(get_lut("sRGB"), device_array(rgb))
         coeffs = np.asarray(spectrum.coeffs, np.float64)
         texel_scale = np.asarray(spectrum.scale, np.float64) * scale
         coeffs = np.concatenate([coeffs, coeffs[:, :1]], axis=1)
@@ -176,12 +177,12 @@ class EnvironmentLight(AbstractSurfacelessLight):
         if not np.any(table > 0):
             table = np.ones_like(table)  # a black map: never sampled (its power is 0)
         return cls(
-            coeffs=jnp.asarray(np.moveaxis(coeffs, -1, 0), dtype),
-            texel_scale=jnp.asarray(texel_scale, dtype),
-            d65=SpectrumTable(jnp.asarray(d65[None, :], dtype)),
-            distribution=PiecewiseConstant2D(jnp.asarray(table, dtype)),
-            to_world=jnp.asarray(m, dtype),
-            world_to_local=jnp.asarray(np.linalg.inv(m), dtype),
+            coeffs=device_array(np.moveaxis(coeffs, -1, 0), dtype),
+            texel_scale=device_array(texel_scale, dtype),
+            d65=SpectrumTable(device_array(d65[None, :], dtype)),
+            distribution=PiecewiseConstant2D(device_array(table, dtype)),
+            to_world=device_array(m, dtype),
+            world_to_local=device_array(np.linalg.inv(m), dtype),
             integral=integral,
         )
 

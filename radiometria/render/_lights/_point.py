@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ...montecarlo import sample_uniform_sphere
 from .._spectral import SpectrumTable
 from ._base import EmissionSample, LightSample
@@ -66,9 +67,9 @@ class PointLight(AbstractDeltaLight):
             rows.append(spectral_param(p, "intensity", w))
         mean = np.array([r.mean() for r in rows])
         return cls(
-            position=jnp.asarray(np.stack(pos), dtype),
+            position=device_array(np.stack(pos), dtype),
             intensity=illuminant_table(rows, dtype),
-            cdf=jnp.asarray(row_cdf(mean), dtype),
+            cdf=device_array(row_cdf(mean), dtype),
             phi=float(4.0 * np.pi * mean.sum()),
         )
 

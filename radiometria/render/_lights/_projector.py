@@ -40,6 +40,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ..._math import dot
 from ...camera import fov_from_focal_length_deg, fov_x_deg
 from .._textures import AbstractTexture, TextureSpec
@@ -161,14 +162,14 @@ class ProjectorLight(AbstractDeltaLight):
         area = 4.0 * np.square(tans) / np.asarray(aspects)
         powers = np.pi * np.asarray(scales) * area * _mean_radiance(irradiance)
         return cls(
-            position=jnp.asarray(np.stack(pos), dtype),
-            to_world=jnp.asarray(np.stack(rot), dtype),
-            world_to_local=jnp.asarray(np.stack([r.T for r in rot]), dtype),
-            tan_half_fov=jnp.asarray(tans, dtype),
-            aspect=jnp.asarray(aspects, dtype),
-            scale=jnp.asarray(scales, dtype),
+            position=device_array(np.stack(pos), dtype),
+            to_world=device_array(np.stack(rot), dtype),
+            world_to_local=device_array(np.stack([r.T for r in rot]), dtype),
+            tan_half_fov=device_array(tans, dtype),
+            aspect=device_array(aspects, dtype),
+            scale=device_array(scales, dtype),
             irradiance=irradiance,
-            cdf=jnp.asarray(row_cdf(powers), dtype),
+            cdf=device_array(row_cdf(powers), dtype),
             phi=float(powers.sum()),
         )
 

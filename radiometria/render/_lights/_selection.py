@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ..._math import acos_fast, asin_fast
 
 __all__ = ["MAX_SPATIAL_EMITTERS", "EmitterBounds"]
@@ -135,14 +136,14 @@ class EmitterBounds(eqx.Module):
         e_area = np.add.reduceat(area, starts)
 
         def arr(x, dt=dtype):
-            return jnp.asarray(x, dt)
+            return device_array(x, dt)
 
         return cls(
             center=arr(center),
             radius=arr(radius),
             axis=arr(axis),
             theta_o=arr(theta_o),
-            two_sided=jnp.asarray(np.asarray(two_sided)[rows], bool),
+            two_sided=device_array(np.asarray(two_sided)[rows], bool),
             area=arr(e_area),
             radiance=arr(np.asarray(radiance)[rows]),
             omega_max=arr(np.where(flat, 2.0 * np.pi, 4.0 * np.pi)),

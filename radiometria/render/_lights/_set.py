@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ._area import AreaLight
 from ._base import AbstractLight, LightSample
 from ._common import pick_row, row_cdf
@@ -106,8 +107,8 @@ class LightSet(AbstractLight):
         prob = np.diff(np.concatenate([[0.0], cdf]))
         return cls(
             lights=tuple(lights),
-            cdf=jnp.asarray(cdf, dtype),
-            prob=jnp.asarray(prob, dtype),
+            cdf=device_array(cdf, dtype),
+            prob=device_array(prob, dtype),
             area_index=area[0] if area else -1,
             infinite_index=infinite[0] if infinite else -1,
         )

@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ..._math import dot
 from ...montecarlo import sample_uniform_cone
 from ...upsampling import RGBAlbedoSpectrum, RGBIlluminantSpectrum
@@ -146,12 +147,12 @@ class SpotLight(AbstractDeltaLight):
             f = spot_falloff(np.cos(theta), c, b) * np.sin(theta)
             powers.append(2.0 * np.pi * row.mean() * np.trapezoid(f, theta))
         return cls(
-            position=jnp.asarray(np.stack(pos), dtype),
-            world_to_local=jnp.asarray(np.stack(inv), dtype),
+            position=device_array(np.stack(pos), dtype),
+            world_to_local=device_array(np.stack(inv), dtype),
             intensity=illuminant_table(rows, dtype),
-            cutoff=jnp.asarray(cut, dtype),
-            beam_width=jnp.asarray(beam, dtype),
-            cdf=jnp.asarray(row_cdf(np.array(powers)), dtype),
+            cutoff=device_array(cut, dtype),
+            beam_width=device_array(beam, dtype),
+            cdf=device_array(row_cdf(np.array(powers)), dtype),
             phi=float(np.sum(powers)),
             texture=concatenate_textures(textures)
             if any(p.get("texture") is not None for p in params)

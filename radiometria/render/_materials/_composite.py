@@ -18,6 +18,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import BlendBxDF, MaskBxDF
 from ...upsampling import RGBAlbedoSpectrum
 from .._spectral import RGB_LUMINANCE, LinearRGB
@@ -146,8 +147,8 @@ class BlendBSDF(AbstractMaterial):
                 "twosided nests only materials without transmission)."
             )
         return cls(
-            children, jnp.asarray([0], jnp.int32), jnp.asarray([1], jnp.int32), weight,
-            jnp.asarray([two_sided], bool), jnp.asarray([transmits], bool),
+            children, device_array([0], jnp.int32), device_array([1], jnp.int32), weight,
+            device_array([two_sided], bool), device_array([transmits], bool),
         )  # fmt: skip
 
     @classmethod
@@ -229,8 +230,8 @@ class Mask(AbstractMaterial):
         opacity = scalar_texture(params.get("opacity", 0.5), "opacity", where)
         (child,) = _nested(params, ("bsdf_0",), cls.NAME, where)
         return cls(
-            MaterialSet.from_materials([child]), jnp.asarray([0], jnp.int32), opacity,
-            jnp.asarray([False], bool),
+            MaterialSet.from_materials([child]), device_array([0], jnp.int32), opacity,
+            device_array([False], bool),
         )  # fmt: skip
 
     @classmethod

@@ -5,6 +5,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import ConductorBxDF
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import SpectrumTable
@@ -31,7 +32,7 @@ def conductor_textures(params: Properties, where: str) -> tuple[AbstractTexture,
     refl = texture_parameter(spec, RGBAlbedoSpectrum, "specular_reflectance", where)
     if refl is None:
         refl = ConstantTexture.from_values([spec], RGBUnboundedSpectrum)
-    table = lambda x: ConstantTexture(SpectrumTable(jnp.asarray(x[None], jnp.float32)))
+    table = lambda x: ConstantTexture(SpectrumTable(device_array(x[None], jnp.float32)))
     return textured.get("eta", table(eta)), textured.get("k", table(k)), refl
 
 
@@ -73,7 +74,7 @@ class Conductor(AbstractMaterial):
     @classmethod
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
         unknown_parameters(params, cls, where)
-        return cls(*conductor_textures(params, where), jnp.asarray([two_sided], bool))
+        return cls(*conductor_textures(params, where), device_array([two_sided], bool))
 
     def bxdf(
         self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None

@@ -5,6 +5,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import DielectricBxDF
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import SpectrumTable
@@ -18,7 +19,7 @@ def dielectric_textures(params: Properties, where: str) -> tuple[AbstractTexture
     two lobe factors may be textures (bitmap, checkerboard, mesh attribute), upsampled as
     bounded reflectances, as Mitsuba's bitmaps are."""
     eta = ConstantTexture(
-        SpectrumTable(jnp.asarray(dielectric_ior(params, where)[None], jnp.float32))
+        SpectrumTable(device_array(dielectric_ior(params, where)[None], jnp.float32))
     )
     factors = [
         texture_parameter(params.get(name), RGBAlbedoSpectrum, name, where)
@@ -48,7 +49,7 @@ class _AbstractSmoothDielectric(AbstractMaterial):
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
         unknown_parameters(params, cls, where)
         two_sided = True if cls.ALWAYS_TWO_SIDED else two_sided
-        return cls(*dielectric_textures(params, where), jnp.asarray([two_sided], bool))
+        return cls(*dielectric_textures(params, where), device_array([two_sided], bool))
 
 
 class Dielectric(_AbstractSmoothDielectric):

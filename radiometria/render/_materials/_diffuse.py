@@ -2,9 +2,9 @@
 
 from typing import ClassVar
 
-import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import DiffuseBxDF
 from ...upsampling import RGBAlbedoSpectrum
 from .._textures import AbstractTexture, ConstantTexture, texture_parameter
@@ -41,7 +41,7 @@ class Diffuse(AbstractMaterial):
         texture = texture_parameter(reflectance, RGBAlbedoSpectrum, "reflectance", where)
         if texture is None:
             texture = ConstantTexture.from_values([reflectance], RGBAlbedoSpectrum)
-        return cls(texture, jnp.asarray([two_sided], bool))
+        return cls(texture, device_array([two_sided], bool))
 
     def bxdf(
         self,

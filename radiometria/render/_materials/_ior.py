@@ -1,9 +1,9 @@
 """Indices of refraction as scene files give them: Mitsuba's named constants, numbers, spectra,
 and the measured conductors of `radiometria.scattering` (thesis 3.1.1, footnote 18)."""
 
-import jax.numpy as jnp
 import numpy as np
 
+from ..._checks import device_array
 from ...scattering import CONDUCTORS, get_conductor
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import LinearRGB, tabulate_spectrum, wavelength_grid_nm
@@ -78,5 +78,5 @@ def conductor_ior(params: Properties, where: str) -> tuple[np.ndarray, np.ndarra
             f"{where}: unknown conductor {material!r}; known: 'none', "
             f"{', '.join(map(repr, CONDUCTORS))}."
         )
-    eta, k = get_conductor(material)(jnp.asarray(grid))
+    eta, k = get_conductor(material)(device_array(grid))
     return np.asarray(eta, np.float64), np.asarray(k, np.float64)

@@ -5,6 +5,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import AbstractBxDF, BSDFSample
 from ._base import AbstractMaterial, Properties, unknown_parameters
 
@@ -69,7 +70,7 @@ class Null(AbstractMaterial):
     @classmethod
     def from_properties(cls, params: Properties, *, two_sided=False, where="scene"):
         unknown_parameters(params, cls, where)
-        return cls(jnp.asarray([True], bool))
+        return cls(device_array([True], bool))
 
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> NullBxDF:
         return NullBxDF(jnp.zeros_like(wavelength_nm))
@@ -78,7 +79,7 @@ class Null(AbstractMaterial):
 def is_null(materials) -> Array:
     """`(m,)` bool: which materials of a `MaterialSet` are `null` (from the plugins' kinds,
     a constant under `jit`)."""
-    kinds = jnp.asarray([isinstance(p, Null) for p in materials.plugins], bool)
+    kinds = device_array([isinstance(p, Null) for p in materials.plugins], bool)
     return kinds[materials.plugin_of]
 
 

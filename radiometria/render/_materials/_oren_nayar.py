@@ -6,6 +6,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import OrenNayarBxDF
 from ...upsampling import RGBAlbedoSpectrum
 from .._textures import AbstractTexture, ConstantTexture
@@ -51,8 +52,8 @@ class OrenNayar(AbstractMaterial):
             )
         return cls(
             ConstantTexture.from_values([params.get("reflectance", 0.5)], RGBAlbedoSpectrum),
-            jnp.asarray([sigma], jnp.float32),
-            jnp.asarray([two_sided], bool),
+            device_array([sigma], jnp.float32),
+            device_array([two_sided], bool),
         )
 
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"]) -> OrenNayarBxDF:

@@ -33,6 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ..._math import dot, safe_div
 from ...scattering import AbstractBxDF, BSDFSample
 from .._spectral import RGB_LUMINANCE
@@ -189,7 +190,7 @@ def _flags(params: Properties, where: str) -> dict:
         value = params.get(name, True)
         if not isinstance(value, bool):
             raise ValueError(f"{where}: parameter {name!r} must be a boolean, got {value!r}.")
-        out[field] = jnp.asarray([value], bool)
+        out[field] = device_array([value], bool)
     return out
 
 
@@ -283,7 +284,7 @@ class NormalMap(_Adapter):
         return cls(
             children=MaterialSet.from_materials([child]), nested=jnp.zeros(1, jnp.int32),
             images=(image,), image_of=jnp.zeros(1, jnp.int32),
-            two_sided=jnp.asarray([two_sided], bool), **_flags(params, where),
+            two_sided=device_array([two_sided], bool), **_flags(params, where),
         )  # fmt: skip
 
     def bxdf(self, row, wavelength_nm, uv=None, geometry=None):
@@ -336,8 +337,8 @@ class BumpMap(_Adapter):
         return cls(
             children=MaterialSet.from_materials([child]), nested=jnp.zeros(1, jnp.int32),
             images=(image,), image_of=jnp.zeros(1, jnp.int32),
-            scale=jnp.asarray([scalar(params, "scale", 1.0, where)], jnp.float32),
-            two_sided=jnp.asarray([two_sided], bool), **_flags(params, where),
+            scale=device_array([scalar(params, "scale", 1.0, where)], jnp.float32),
+            two_sided=device_array([two_sided], bool), **_flags(params, where),
         )  # fmt: skip
 
     def bxdf(self, row, wavelength_nm, uv=None, geometry=None):

@@ -6,6 +6,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import PlasticBxDF, RoughPlasticBxDF, rough_plastic_tables
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._textures import AbstractTexture, ConstantTexture, texture_parameter
@@ -93,9 +94,9 @@ class Plastic(AbstractMaterial):
         return cls(
             c["d"],
             c["s"],
-            jnp.asarray([c["eta"]], jnp.float32),
-            jnp.asarray([c["nonlinear"]], bool),
-            jnp.asarray([two_sided], bool),
+            device_array([c["eta"]], jnp.float32),
+            device_array([c["nonlinear"]], bool),
+            device_array([two_sided], bool),
         )
 
     def bxdf(self, row: Int[Array, " n"], wavelength_nm: Float[Array, "n k"], uv=None):
@@ -174,12 +175,12 @@ class RoughPlastic(AbstractMaterial):
         return cls(
             c["d"],
             c["s"],
-            jnp.asarray([c["eta"]], jnp.float32),
-            jnp.asarray([c["nonlinear"]], bool),
-            jnp.asarray([alpha], jnp.float32),
-            jnp.asarray(t, jnp.float32)[None],
-            jnp.asarray([r], jnp.float32),
-            jnp.asarray([two_sided], bool),
+            device_array([c["eta"]], jnp.float32),
+            device_array([c["nonlinear"]], bool),
+            device_array([alpha], jnp.float32),
+            device_array(t, jnp.float32)[None],
+            device_array([r], jnp.float32),
+            device_array([two_sided], bool),
             distribution,
         )
 

@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ..._math import interp_columns
 from ...colorimetry import get_cmfs
 from ...scattering import PrincipledBxDF, PrincipledThinBxDF, principled_eta
@@ -44,7 +45,9 @@ def path_luminance(color: Float[Array, "n k"], wavelength_nm: Float[Array, "n k"
     path's wavelengths of $\\bar y(\\lambda)\\,C(\\lambda)$ (no division by the wavelength
     density), `(n,)`; the principled BSDF's tints divide by it."""
     wl, y = _ybar()
-    ybar = interp_columns(wavelength_nm, jnp.asarray(wl, color.dtype), jnp.asarray(y, color.dtype))
+    ybar = interp_columns(
+        wavelength_nm, device_array(wl, color.dtype), device_array(y, color.dtype)
+    )
     return jnp.mean(ybar * color, axis=-1)
 
 
@@ -145,10 +148,10 @@ class Principled(AbstractMaterial):
         return cls(
             base,
             *scalars.values(),
-            jnp.asarray([eta], jnp.float32),
-            jnp.asarray([rates], jnp.float32),
-            jnp.asarray([transmits], bool),
-            jnp.asarray([two_sided], bool),
+            device_array([eta], jnp.float32),
+            device_array([rates], jnp.float32),
+            device_array([transmits], bool),
+            device_array([two_sided], bool),
         )
 
     @property
@@ -256,9 +259,9 @@ class PrincipledThin(AbstractMaterial):
             *scalars,
             diff,
             eta,
-            jnp.asarray([rates], jnp.float32),
-            jnp.asarray([transmits], bool),
-            jnp.asarray([True], bool),  # both sides scatter, whatever `twosided` says
+            device_array([rates], jnp.float32),
+            device_array([transmits], bool),
+            device_array([True], bool),  # both sides scatter, whatever `twosided` says
         )
 
     @property

@@ -5,6 +5,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import RoughConductorBxDF
 from .._textures import AbstractTexture
 from ._base import AbstractMaterial, Properties, ScaledBxDF, parameters_differ, unknown_parameters
@@ -83,7 +84,7 @@ class RoughConductor(AbstractMaterial):
         return kind(
             *conductor_textures(params, where),
             *roughness(params, where),
-            jnp.asarray([two_sided], bool),
+            device_array([two_sided], bool),
         )
 
     @property

@@ -5,6 +5,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Bool, Float, Int
 
+from ..._checks import device_array
 from ...scattering import RoughDielectricBxDF
 from .._textures import AbstractTexture
 from ._base import AbstractMaterial, Properties, ScaledBxDF, parameters_differ, unknown_parameters
@@ -54,7 +55,7 @@ class RoughDielectric(AbstractMaterial):
         return kind(
             *dielectric_textures(params, where),
             *roughness(params, where),
-            jnp.asarray([two_sided], bool),
+            device_array([two_sided], bool),
         )
 
     @property

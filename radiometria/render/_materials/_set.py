@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Bool, Int
 
+from ..._checks import device_array
 from ..._math import compact_indices
 from ...scattering import AbstractBxDF, BSDFSample
 from ._base import AbstractMaterial, concatenate
@@ -66,13 +67,13 @@ class MaterialSet(eqx.Module):
             row_of += list(range(first, first + m.n_rows))
             transmissive += np.asarray(m.transmissive_rows, bool).tolist()
         plugins = tuple(concatenate(groups[k]) for k in kinds)
-        two_sided = jnp.concatenate([jnp.asarray(m.two_sided, bool) for m in materials])
+        two_sided = jnp.concatenate([device_array(m.two_sided, bool) for m in materials])
         return cls(
             plugins=plugins,
-            plugin_of=jnp.asarray(plugin_of, jnp.int32),
-            row_of=jnp.asarray(row_of, jnp.int32),
+            plugin_of=device_array(plugin_of, jnp.int32),
+            row_of=device_array(row_of, jnp.int32),
             two_sided=two_sided,
-            transmissive=jnp.asarray(transmissive, bool),
+            transmissive=device_array(transmissive, bool),
             identity_rows=len(plugins) == 1 and bool(np.all(np.diff(row_of) == 1)),
             tangent_frame=any(p.tangent_frame for p in plugins),
         )
@@ -104,8 +105,8 @@ class MaterialSet(eqx.Module):
         plugins = tuple(concatenate(groups[k]) for k in kinds)
         return cls(
             plugins=plugins,
-            plugin_of=jnp.asarray(plugin_of, jnp.int32),
-            row_of=jnp.asarray(row_of, jnp.int32),
+            plugin_of=device_array(plugin_of, jnp.int32),
+            row_of=device_array(row_of, jnp.int32),
             two_sided=jnp.concatenate([s.two_sided for s in sets]),
             transmissive=jnp.concatenate([s.transmissive for s in sets]),
             identity_rows=len(kinds) == 1

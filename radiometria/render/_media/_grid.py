@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ...media import GridMedium, HenyeyGreenstein, coarse_majorant_grid
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
@@ -159,16 +160,16 @@ class GridMediumPlugin(AbstractMediumPlugin):
             raise ValueError(f"{where}: the grid's to_world must be finite and invertible.")
         hi, lo = coarse_majorant_grid(np.asarray(density, np.float32))
         return cls(
-            density=jnp.asarray(density, jnp.float32),
-            sigma_t=SpectrumTable(jnp.asarray(sigma_t[None], jnp.float32)),
-            albedo=SpectrumTable(jnp.asarray(albedo[None], jnp.float32)),
-            albedo_grid=None if albedo_grid is None else jnp.asarray(albedo_grid, jnp.float32),
-            to_local=jnp.asarray(np.linalg.inv(m), jnp.float32),
-            max_density=jnp.asarray(np.max(density), jnp.float32),
-            min_density=jnp.asarray(np.min(density), jnp.float32),
-            majorant_grid=jnp.asarray(hi, jnp.float32),
-            minorant_grid=jnp.asarray(lo, jnp.float32),
-            g=jnp.asarray([g], jnp.float32),
+            density=device_array(density, jnp.float32),
+            sigma_t=SpectrumTable(device_array(sigma_t[None], jnp.float32)),
+            albedo=SpectrumTable(device_array(albedo[None], jnp.float32)),
+            albedo_grid=None if albedo_grid is None else device_array(albedo_grid, jnp.float32),
+            to_local=device_array(np.linalg.inv(m), jnp.float32),
+            max_density=device_array(np.max(density), jnp.float32),
+            min_density=device_array(np.min(density), jnp.float32),
+            majorant_grid=device_array(hi, jnp.float32),
+            minorant_grid=device_array(lo, jnp.float32),
+            g=device_array([g], jnp.float32),
         )
 
     @property

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ...media import HenyeyGreenstein, HomogeneousMedium
 from ...upsampling import RGBAlbedoSpectrum, RGBUnboundedSpectrum
 from .._spectral import LinearRGB, SpectrumTable, tabulate_spectrum
@@ -79,9 +80,9 @@ class HomogeneousMediumPlugin(AbstractMediumPlugin):
         if not -1.0 < g < 1.0:
             raise ValueError(f"{where}: the phase function's g must be in (-1, 1), got {g}.")
         return cls(
-            SpectrumTable(jnp.asarray(sigma_t[None], jnp.float32)),
-            SpectrumTable(jnp.asarray(albedo[None], jnp.float32)),
-            jnp.asarray([g], jnp.float32),
+            SpectrumTable(device_array(sigma_t[None], jnp.float32)),
+            SpectrumTable(device_array(albedo[None], jnp.float32)),
+            device_array([g], jnp.float32),
         )
 
     @property

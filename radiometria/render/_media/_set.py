@@ -5,6 +5,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ...media import HomogeneousMedium, MediumInteraction, PhaseSample
 from ._base import AbstractMediumPlugin
 
@@ -76,8 +77,8 @@ class MediumSet(eqx.Module):
             row_of += list(range(first, first + m.n_rows))
         return cls(
             plugins=tuple(_concatenate(g) for g in groups),
-            plugin_of=jnp.asarray(plugin_of, jnp.int32),
-            row_of=jnp.asarray(row_of, jnp.int32),
+            plugin_of=device_array(plugin_of, jnp.int32),
+            row_of=device_array(row_of, jnp.int32),
         )
 
     @property

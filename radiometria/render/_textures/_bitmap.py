@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ...upsampling import (
     RGBAlbedoSpectrum,
     RGBIlluminantSpectrum,
@@ -128,16 +129,16 @@ class BitmapTexture(AbstractTexture):
         else:
             raise ValueError(f"`rgb_spectrum` must be one of the RGB spectrum classes, got "
                              f"{rgb_spectrum!r}.")  # fmt: skip
-        coeffs = np.asarray(get_lut("sRGB").coefficients(jnp.asarray(x)), np.float64)
+        coeffs = np.asarray(get_lut("sRGB").coefficients(device_array(x)), np.float64)
         illuminant = None
         if rgb_spectrum is RGBIlluminantSpectrum:  # s S(rgb/s) D65: white (1, 1, 1) is D65
             d65 = tabulate_spectrum(LinearRGB([1.0, 1.0, 1.0]), RGBIlluminantSpectrum)
-            illuminant = SpectrumTable(jnp.asarray(d65[None], dtype))
+            illuminant = SpectrumTable(device_array(d65[None], dtype))
         return cls(
-            coeffs=jnp.asarray(coeffs, dtype),
-            scale=jnp.asarray(scale, dtype),
+            coeffs=device_array(coeffs, dtype),
+            scale=device_array(scale, dtype),
             illuminant=illuminant,
-            to_uv=jnp.asarray(uv_transform(to_uv), dtype),
+            to_uv=device_array(uv_transform(to_uv), dtype),
             filter_type=filter_type,
             wrap_mode=wrap_mode,
         )

@@ -5,6 +5,7 @@ from typing import ClassVar
 import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ...upsampling import RGBAlbedoSpectrum
 from .._spectral import SpectralValue
 from ._base import AbstractTexture
@@ -50,7 +51,7 @@ class CheckerboardTexture(AbstractTexture):
         `rgb_spectrum` (`tabulate_spectrum`), and Mitsuba's `to_uv` (4 x 4 or 3 x 3)."""
         c0 = ConstantTexture.from_values([color0], rgb_spectrum, dtype)
         c1 = ConstantTexture.from_values([color1], rgb_spectrum, dtype)
-        return cls(c0, c1, jnp.asarray(uv_transform(to_uv)[None], dtype))
+        return cls(c0, c1, device_array(uv_transform(to_uv)[None], dtype))
 
     def __check_init__(self):
         if self.color0.n_rows != self.color1.n_rows or self.to_uv.shape[0] != self.color0.n_rows:

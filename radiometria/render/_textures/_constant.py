@@ -4,6 +4,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from .._spectral import SpectralValue, SpectrumTable, tabulate_spectrum, wavelength_grid_nm
 from ._base import AbstractTexture
 
@@ -39,7 +40,7 @@ class ConstantTexture(AbstractTexture):
         rows = [tabulate_spectrum(v, rgb_spectrum) for v in values]
         if not rows:
             return cls(SpectrumTable(jnp.zeros((0, wavelength_grid_nm().shape[0]), dtype)))
-        return cls(SpectrumTable(jnp.asarray(np.stack(rows), dtype)))
+        return cls(SpectrumTable(device_array(np.stack(rows), dtype)))
 
     @property
     def n_rows(self) -> int:

@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ...upsampling import (
     RGBAlbedoSpectrum,
     RGBUnboundedSpectrum,
@@ -74,7 +75,7 @@ def corner_spectra(values, spectrum: str) -> np.ndarray:
     else:
         raise ValueError(f"`spectrum` must be one of {SPECTRUM_KINDS}, got {spectrum!r}.")
     flat = x.reshape(-1, 3)
-    coeffs = np.asarray(get_lut("sRGB").coefficients(jnp.asarray(flat)), np.float64)
+    coeffs = np.asarray(get_lut("sRGB").coefficients(device_array(flat)), np.float64)
     # Black and white are the table's (0, 0, -inf) and (0, 0, inf): kept finite, same spectra.
     coeffs = np.clip(coeffs, -_GREY, _GREY)
     return np.concatenate([coeffs.reshape(x.shape), scale[..., None]], axis=-1)
@@ -140,7 +141,7 @@ class MeshAttributeTexture(AbstractTexture):
             )
         if not np.isfinite(scale):
             raise ValueError(f"`scale` must be finite, got {scale}.")
-        return cls(jnp.asarray([scale], dtype), attribute, _SPECTRA[rgb_spectrum])
+        return cls(device_array([scale], dtype), attribute, _SPECTRA[rgb_spectrum])
 
     @property
     def n_rows(self) -> int:

@@ -6,6 +6,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, Float
 
+from ..._checks import device_array
 from ._bitmap import FILTER_TYPES, WRAP_MODES, _wrap, uv_transform
 
 __all__ = ["RawImage"]
@@ -46,7 +47,7 @@ class RawImage(eqx.Module):
         if filter_type not in FILTER_TYPES or wrap_mode not in WRAP_MODES:
             raise ValueError(f"filter_type must be one of {FILTER_TYPES} and wrap_mode one of "
                              f"{WRAP_MODES}, got {filter_type!r}, {wrap_mode!r}.")  # fmt: skip
-        return cls(jnp.asarray(x, dtype), jnp.asarray(uv_transform(to_uv), dtype),
+        return cls(device_array(x, dtype), device_array(uv_transform(to_uv), dtype),
                    filter_type, wrap_mode)  # fmt: skip
 
     def _setup(self, uv):

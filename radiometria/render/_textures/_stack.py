@@ -4,6 +4,7 @@ import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float, Int
 
+from ..._checks import device_array
 from ._base import AbstractTexture
 from ._bitmap import BitmapTexture
 
@@ -88,5 +89,5 @@ def concatenate_textures(textures: "list[AbstractTexture]") -> AbstractTexture:
     if len(merged) == 1:
         return merged[0]
     return TextureStack(
-        tuple(merged), jnp.asarray(part_of, jnp.int32), jnp.asarray(row_of, jnp.int32)
+        tuple(merged), device_array(part_of, jnp.int32), device_array(row_of, jnp.int32)
     )
