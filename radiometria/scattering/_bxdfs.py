@@ -58,6 +58,7 @@ from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
 from .._math import safe_div
+from ..montecarlo._warps import disk_concentric_xy
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz, coordinate_system
 from ._fresnel import _check_eta, _check_k, _fr_conductor, _fr_dielectric_snell
 from ._microfacet import (
@@ -66,7 +67,6 @@ from ._microfacet import (
     _D_den,
     _slope_root,
 )
-from ._warps import _sample_disk_concentric
 
 __all__ = [
     "AbstractBxDF",
@@ -135,7 +135,7 @@ def _u2(u2) -> Array:
 
 def _sample_cosine_hemisphere(u0: Array, u1: Array) -> tuple[Array, Array, Array]:
     """Malley's method on the concentric disk mapping (pbrt-v4 A.5.3); returns x, y, z >= 0."""
-    x, y = _sample_disk_concentric(u0, u1)
+    x, y = disk_concentric_xy(u0, u1)
     z = _sqrt_clamped(1.0 - x * x - y * y)
     return x, y, z
 
@@ -624,7 +624,7 @@ class RetroreflectiveBxDF(AbstractBxDF):
         )
         # Concentric disk point (dx, dy) with rho^2 uniform in [0, 1]: the power-cosine lobe's
         # inversion is cos(alpha) = (1 - rho^2)^(1/(n+1)), and (dx, dy)/rho a uniform azimuth.
-        dx, dy = _sample_disk_concentric(u2[..., 0], u2[..., 1])
+        dx, dy = disk_concentric_xy(u2[..., 0], u2[..., 1])
         rho2 = dx * dx + dy * dy
         log_c = jnp.log1p(-jnp.minimum(rho2, 1.0)) / (n + 1.0)
         cos_a = jnp.exp(log_c)

@@ -18,8 +18,8 @@ from jax import Array
 
 from .._checks import as_float_array
 from .._math import acos_fast, align_ranks, safe_sqrt, sincos_pi
+from ..montecarlo._warps import disk_concentric_xy
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
-from ._warps import _sample_disk_concentric
 
 __all__ = ["BeckmannDistribution", "TrowbridgeReitzDistribution", "roughness_to_alpha"]
 
@@ -92,7 +92,7 @@ def _sample_wm_xyz(x, y, z, ax, ay, u0, u1) -> tuple[Array, Array, Array]:
     t2x, t2y, t2z = -hz * t1y, hz * t1x, hx * t1y - hy * t1x
     # Uniformly distributed point on the unit disk (concentric mapping, as Mitsuba; pbrt
     # uses the polar one: any uniform disk sample gives the same distribution).
-    px, py = _sample_disk_concentric(u0, u1)
+    px, py = disk_concentric_xy(u0, u1)
     # Warp the disk to the projection of the visible hemisphere.
     h = _sqrt_clamped(1.0 - px * px)
     s = 0.5 * (1.0 + hz)

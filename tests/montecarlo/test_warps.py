@@ -198,6 +198,24 @@ def test_concentric_disk_reference_points():
     )
 
 
+def test_concentric_disk_matches_trigonometric_form_in_float32_and_float64():
+    # Shirley & Chiu's map written with NumPy's float64 cos/sin (pbrt's form), against the
+    # polynomial sines and cosines the warp uses, in both precisions.
+    g = (np.arange(256) + 0.5) / 256  # no variate at 1/2: the map divides by 2 u - 1
+    u = np.stack(np.meshgrid(g, g, indexing="ij"), -1).reshape(-1, 2)
+    o = 2.0 * u - 1.0
+    x_major = np.abs(o[:, 0]) > np.abs(o[:, 1])
+    r = np.where(x_major, o[:, 0], o[:, 1])
+    theta = np.where(
+        x_major, np.pi / 4 * o[:, 1] / o[:, 0], np.pi / 2 - np.pi / 4 * o[:, 0] / o[:, 1]
+    )
+    expected = np.stack([r * np.cos(theta), r * np.sin(theta)], -1)
+    np.testing.assert_allclose(mc.sample_uniform_disk_concentric(u), expected, atol=1e-10)
+    got32 = mc.sample_uniform_disk_concentric(jnp.asarray(u, jnp.float32))
+    assert got32.dtype == jnp.float32
+    np.testing.assert_allclose(np.asarray(got32, np.float64), expected, atol=4e-7)
+
+
 def test_uniform_triangle_barycentrics():
     b = mc.sample_uniform_triangle(jax.random.uniform(jax.random.key(6), (1000, 2)))
     assert jnp.all(b >= 0)
