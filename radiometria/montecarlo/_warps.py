@@ -24,7 +24,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_last_axis, check_unit_interval
-from .._math import dot, safe_div, safe_sqrt, sincos_pi, sincos_reduced
+from .._math import disk_concentric_xy, dot, safe_div, safe_sqrt, sincos_pi
 from .._types import Float, FloatLike
 from ..constants import VISIBLE_WAVELENGTH_MAX_NM, VISIBLE_WAVELENGTH_MIN_NM
 
@@ -155,24 +155,6 @@ def sample_uniform_disk_concentric(u: FloatLike, *, check: bool = True) -> Float
     """
     u = _u(u, 2, check=check)
     return jnp.stack(disk_concentric_xy(u[..., 0], u[..., 1]), axis=-1)
-
-
-def disk_concentric_xy(u0: Array, u1: Array) -> tuple[Array, Array]:
-    """`sample_uniform_disk_concentric` without checks, as `(x, y)`: also the BxDF samplers'
-    (`radiometria.scattering`) and the thin lens's warp, in the renderer's inner loop.
-
-    The angle is pi/4 (b/a) on the wedges where |a| > |b| (a = 2 u0 - 1, b = 2 u1 - 1) and
-    pi/2 minus pi/4 (a/b) on the others; its sine and cosine on [-pi/4, pi/4] come from
-    `_math.sincos_reduced` (error < 1e-11), swapped on the second kind of wedge: XLA:CPU lowers
-    `sin` and `cos` to scalar library calls, about 10x slower than the polynomials."""
-    a = 2.0 * u0 - 1.0
-    b = 2.0 * u1 - 1.0
-    use_a = jnp.abs(a) > jnp.abs(b)
-    r = jnp.where(use_a, a, b)
-    num = jnp.where(use_a, b, a)
-    den = jnp.where(r == 0, 1.0, r)
-    s, c = sincos_reduced(PI_OVER_4 * (num / den))
-    return r * jnp.where(use_a, c, s), r * jnp.where(use_a, s, c)
 
 
 @eqx.filter_jit

@@ -57,8 +57,7 @@ import numpy as np
 from jax import Array
 
 from .._checks import as_float_array, check_choice, check_in_range
-from .._math import safe_div
-from ..montecarlo._warps import disk_concentric_xy
+from .._math import disk_concentric_xy, safe_div
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz, coordinate_system
 from ._fresnel import _check_eta, _check_k, _fr_conductor, _fr_dielectric_snell
 from ._microfacet import (

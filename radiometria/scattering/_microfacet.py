@@ -17,8 +17,7 @@ import jax.scipy.special as jsp
 from jax import Array
 
 from .._checks import as_float_array
-from .._math import acos_fast, align_ranks, safe_sqrt, sincos_pi
-from ..montecarlo._warps import disk_concentric_xy
+from .._math import acos_fast, align_ranks, disk_concentric_xy, safe_sqrt, sincos_pi
 from ._directions import _inv_norm, _sqrt_clamped, _stack3, _xyz
 
 __all__ = ["BeckmannDistribution", "TrowbridgeReitzDistribution", "roughness_to_alpha"]
