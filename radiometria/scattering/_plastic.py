@@ -286,7 +286,8 @@ def _tables(alpha: Array, eta: Array, distribution: str, n_t: int, n_r: int):
 
     # Both averages in one pass over the concatenated rules (columns [0, n_t^2) refract with
     # eta, the rest reflect with 1 / eta): one copy of the visible-normal sampling, Fresnel and
-    # G1 in the program instead of two (first compile 0.95 -> 0.5 s with Beckmann, measured).
+    # G1 in the program instead of two (first compile with Beckmann, measured: 0.95 -> 0.68 s in
+    # float32, 1.41 -> 0.99 s in float64; the tables are bit-identical).
     (u_t, w_t), (u_r, w_r) = _gauss_legendre(n_t), _gauss_legendre(n_r)
     k = u_t.shape[0]
     u = jnp.asarray(np.concatenate([u_t, u_r]), wi.dtype)

@@ -260,7 +260,7 @@ class AreaLight(AbstractLight):
         if face_uv is not None and not isinstance(radiance, ConstantTexture):
             c = np.asarray(face_uv, np.float64)[light_face]
             uv = {
-                k: device_array(np.asarray(v, dtype))
+                k: device_array(v, dtype)
                 for k, v in (
                     ("uv0", c[:, 0]),
                     ("duv1", c[:, 1] - c[:, 0]),
