@@ -143,8 +143,10 @@ def test_disabled_native_falls_back_to_the_jax_traversal():
 def test_fresh_cache_compiles_the_kernel_atomically(tmp_path):
     out = _run(_PROBE, RADIOMETRIA_CACHE_DIR=str(tmp_path))
     assert "(True, 'compiled and loaded') native [True, True]" in out.stdout, out.stderr
+    # the probe's queries are float32: only that library is built
     files = sorted(p.name for p in tmp_path.iterdir())
-    assert len(files) == 1 and files[0].startswith("bvh_traverse-") and files[0].endswith(".so")
+    assert len(files) == 1 and files[0].startswith("bvh_traverse-f32-"), files
+    assert files[0].endswith(".so")
 
 
 _PREBUILD_PROBE = (
@@ -164,20 +166,34 @@ print("threads", started, again)
 
 
 @pytest.mark.skipif(not _HAS_COMPILER, reason="no C++ compiler")
-def test_prebuild_compiles_the_two_halves_in_the_background_and_load_waits(tmp_path):
-    """`prebuild` starts one build thread; `_load` takes its library (the two translation
-    units, float32 and float64, linked into one with all eight handlers) and queries run."""
-    out = _run(_PREBUILD_PROBE, RADIOMETRIA_CACHE_DIR=str(tmp_path))
+def test_prebuild_compiles_the_float32_library_in_the_background_and_load_waits(tmp_path):
+    """`prebuild` starts one build thread, of the float32 library (what a render needs);
+    `_load` takes it and float32 queries run; a float64 query builds the float64 library then.
+    Each library holds its own precision's four handlers."""
+    code = _PREBUILD_PROBE + (
+        "import jax\n"
+        "jax.config.update('jax_enable_x64', True)\n"
+        "h64 = intersect_closest(build_bvh(*icosphere(1), dtype=np.float64), np.zeros((2, 3)),\n"
+        "                        np.array([[0, 0, 1.0], [1, 0, 0]]), backend='native')\n"
+        "print('f64', h64.t.dtype, np.asarray(h64.prim >= 0).tolist())\n"
+    )
+    out = _run(code, RADIOMETRIA_CACHE_DIR=str(tmp_path))
     assert "(True, 'compiled and loaded') native [True, True]" in out.stdout, out.stderr
-    assert "threads 1 " in out.stdout and out.stdout.split()[-1] in ("0", "1"), out.stdout
-    (lib,) = tmp_path.iterdir()
+    assert "threads 1 " in out.stdout, out.stdout
+    assert "f64 float64 [True, True]" in out.stdout, out.stderr
+    libs = {p.name.split("-")[1]: p for p in tmp_path.iterdir()}
+    assert sorted(libs) == ["f32", "f64"], libs
     nm = shutil.which("nm")
     if nm is not None:
-        symbols = subprocess.run([nm, "-D", str(lib)], capture_output=True, text=True).stdout
-        for kind in ("Bvh", "Brute"):
-            for hit in ("Closest", "Any"):
-                for bits in ("32", "64"):
+        for bits in ("32", "64"):
+            symbols = subprocess.run(
+                [nm, "-D", str(libs[f"f{bits}"])], capture_output=True, text=True
+            ).stdout
+            other = "64" if bits == "32" else "32"
+            for kind in ("Bvh", "Brute"):
+                for hit in ("Closest", "Any"):
                     assert f"Radiometria{kind}{hit}F{bits}" in symbols
+                    assert f"Radiometria{kind}{hit}F{other}" not in symbols
 
 
 def test_a_failed_background_build_falls_back_with_its_reason(tmp_path):

@@ -16,8 +16,9 @@ that runs these kernels.
 The kernel is compiled on first use with the system's C++ compiler against the FFI headers
 that ship with jaxlib, and cached (`radiometria._native_build`, which needs no JAX: the
 command line starts the build with `prebuild()` before it imports JAX, so that a first
-render's compiler runs beside the imports and the scene's loading). The outcome of the
-first build and load is kept for the process (`_load`). Without a compiler, or
+render's compiler runs beside the imports and the scene's loading). The float32 and float64
+kernels are two libraries, each built on first use (a render needs only the float32 one). The
+outcome of each build and load is kept for the process (`_load`). Without a compiler, or
 with `RADIOMETRIA_NATIVE=0`, `native_status()` says why and the JAX traversal is used.
 """
 
@@ -53,29 +54,42 @@ class _NativeLibrary(NamedTuple):
 
 
 @functools.cache
-def _load() -> _NativeLibrary:
-    """Build, load and register the kernels, once per process (later calls return the result)."""
+def _load(bits: int = 32) -> _NativeLibrary:
+    """Build, load and register the float`bits` kernels, once per process and precision
+    (later calls return the result)."""
     if disabled():
         return _NativeLibrary(False, "disabled by RADIOMETRIA_NATIVE=0", None)
     if (cxx := compiler()) is None:
         return _NativeLibrary(False, "no C++ compiler found ($CXX, c++, g++, clang++)", None)
     try:
-        path = library_path(cxx)
+        path = library_path(cxx, bits)
         lib = ctypes.cdll.LoadLibrary(str(path))
-        for symbol in _SYMBOLS.values():
-            jax.ffi.register_ffi_target(
-                symbol, jax.ffi.pycapsule(getattr(lib, symbol)), platform="cpu"
-            )
+        for (_, _, dtype), symbol in _SYMBOLS.items():
+            if dtype == f"float{bits}":
+                jax.ffi.register_ffi_target(
+                    symbol, jax.ffi.pycapsule(getattr(lib, symbol)), platform="cpu"
+                )
     except Exception as e:  # noqa: BLE001 - any failure means: use the JAX traversal
         return _NativeLibrary(False, f"build or load failed: {e}", None)
     return _NativeLibrary(True, "compiled and loaded", lib)
 
 
+def _symbol(kind: str, any_hit: bool, dtype) -> str:
+    """The handler of a query in `dtype` (float32 or float64), its library loaded first: the
+    float64 kernels are built on their first use (`native_status` builds the float32 ones)."""
+    dtype = str(dtype)
+    lib = _load(64 if dtype == "float64" else 32)
+    if not lib.ok:
+        raise RuntimeError(f"the native {dtype} ray-casting kernels are unavailable: {lib.reason}")
+    return _SYMBOLS[(kind, any_hit, dtype)]
+
+
 def native_status() -> tuple[bool, str]:
     """Whether the native CPU ray-casting kernels are available, and why (or why not).
 
-    Compiles and loads the kernel on the first call (a few seconds, once per machine: the
-    library is cached; see the module docstring of `radiometria.render._geometry._native`).
+    Compiles and loads the float32 kernels, the renderer's, on the first call (a few
+    seconds, once per machine: the library is cached; see the module docstring of
+    `radiometria.render._geometry._native`); the float64 ones are built on their first query.
 
     **Returns:**
 
@@ -142,7 +156,7 @@ def _query_fn(symbol: str, n_geometry: int, **attrs):
 
 def native_query(bvh, o, d, tmin, tmax, *, any_hit: bool):
     """BVH traversal in native code; returns `(t, prim, b1, b2)` arrays of shape `(n,)`."""
-    symbol = _SYMBOLS[("Bvh", any_hit, str(bvh.triangles.dtype))]
+    symbol = _symbol("Bvh", any_hit, bvh.triangles.dtype)
     fn = _query_fn(symbol, 4, stack_size=int(max(bvh.stack_size, 1)), threads=_threads())
     args = (bvh.node_boxes, bvh.node_children, bvh.triangles, bvh.prim_ids, o, d, tmin, tmax)
     return fn(*(lax.stop_gradient(x) for x in args))
@@ -151,7 +165,7 @@ def native_query(bvh, o, d, tmin, tmax, *, any_hit: bool):
 def native_brute_query(rows, tri, o, d, tmin, tmax, *, any_hit: bool):
     """Brute force in native code (`rows`: `(9, f)` sorted corners, `tri`: `(f, 9)` corners);
     returns `(t, prim, b1, b2)` arrays of shape `(n,)`."""
-    symbol = _SYMBOLS[("Brute", any_hit, str(tri.dtype))]
+    symbol = _symbol("Brute", any_hit, tri.dtype)
     fn = _query_fn(symbol, 2, threads=_threads())
     return fn(*(lax.stop_gradient(x) for x in (rows, tri, o, d, tmin, tmax)))
 

@@ -529,9 +529,9 @@ constexpr auto bind() {
 
 }  // namespace
 
-// The float32 and float64 handlers can be compiled as two translation units in parallel
-// (-DRADIOMETRIA_PART=32 and =64, linked together: `radiometria._native_build.build`); without the macro
-// this one file defines all eight.
+// The float32 and float64 handlers are compiled as two libraries, each when first needed
+// (-DRADIOMETRIA_PART=32 and =64: `radiometria._native_build.build`); without the macro this
+// one file defines all eight.
 #if !defined(RADIOMETRIA_PART) || RADIOMETRIA_PART == 32
 XLA_FFI_DEFINE_HANDLER_SYMBOL(RadiometriaBvhClosestF32, (query<ffi::F32, false>),
                               (bind<ffi::F32, false>()));
