@@ -67,7 +67,7 @@ class MaterialSet(eqx.Module):
             row_of += list(range(first, first + m.n_rows))
             transmissive += np.asarray(m.transmissive_rows, bool).tolist()
         plugins = tuple(concatenate(groups[k]) for k in kinds)
-        two_sided = jnp.concatenate([device_array(m.two_sided, bool) for m in materials])
+        two_sided = device_array(np.concatenate([np.asarray(m.two_sided, bool) for m in materials]))
         return cls(
             plugins=plugins,
             plugin_of=device_array(plugin_of, jnp.int32),
